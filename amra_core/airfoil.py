@@ -1,0 +1,266 @@
+"""Full-range (+/-180 deg) NACA 0012 section aerodynamics for jitted kernels.
+
+Data path: table file in ``assets/airfoils/`` -> :func:`load_airfoil`
+(:class:`AirfoilTable`, validated, origin line kept) -> :func:`compile_airfoil`
+(:class:`AirfoilArrays`: coefficients resampled by PCHIP onto a uniform fine
+grid) -> :func:`airfoil_coefficients` (``@kernel``, O(1) linear lookup plus
+a Mach correction of the attached-flow lift, see its docstring).
+
+Conventions: angle of attack in radians inside kernels (degrees in tables),
+coefficients per unit span based on chord, Cm about the quarter chord,
+positive nose-up (TN 3361 convention; the digitised file does not state the
+reference point - to be verified, as its origin line says).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import NamedTuple
+
+import numpy as np
+from scipy.interpolate import PchipInterpolator
+
+from amra_core.jit import kernel
+
+#: Directory of the shipped airfoil tables.
+AIRFOIL_DIR = Path(__file__).resolve().parents[1] / "assets" / "airfoils"
+
+#: Available table names -> file in :data:`AIRFOIL_DIR`.
+AIRFOIL_FILES = {
+    "naca0012_critzos": "naca0012_critzos_tn3361_re1p8e6.csv",  # Re 1.8e6, Cl Cd Cm
+    "naca0012_sheldahl360k": "naca0012_sheldahl_klimas_re360k.dat",  # Re 3.6e5, no Cm
+}
+
+MACH_CLIP = 0.7  #: Mach number at which the Prandtl-Glauert factor is capped [-].
+PG_FULL_DEG = 10.0  #: |alpha| up to which the full Prandtl-Glauert factor applies [deg].
+PG_NONE_DEG = 20.0  #: |alpha| from which no Prandtl-Glauert factor applies [deg].
+
+
+@dataclass(frozen=True)
+class AirfoilTable:
+    """A section table as read from its file (degrees, dimensionless coefficients).
+
+    Attributes
+    ----------
+    name : str
+        Registry name (a key of :data:`AIRFOIL_FILES`, or free text).
+    origin : str
+        The file's origin line (text after the leading ``#``).
+    alpha_deg : tuple of float
+        Angle of attack [deg], strictly increasing from -180 to 180.
+    cl, cd, cm : tuple of float
+        Lift, drag and quarter-chord moment coefficients [-]; ``cm`` is all
+        zeros when the source has no moment data.
+    has_cm : bool
+        Whether the source provides Cm.
+    """
+
+    name: str
+    origin: str
+    alpha_deg: tuple
+    cl: tuple
+    cd: tuple
+    cm: tuple
+    has_cm: bool = True
+
+    def __post_init__(self):
+        cols = {k: tuple(float(v) for v in getattr(self, k)) for k in ("alpha_deg", "cl", "cd", "cm")}
+        for k, v in cols.items():
+            object.__setattr__(self, k, v)
+        a = np.asarray(self.alpha_deg)
+        if len({len(v) for v in cols.values()}) != 1 or a.size < 4:
+            raise ValueError(f"airfoil {self.name!r}: columns must have equal length >= 4")
+        if not all(np.all(np.isfinite(v)) for v in cols.values()):
+            raise ValueError(f"airfoil {self.name!r}: non-finite value in table")
+        if np.any(np.diff(a) <= 0.0):
+            raise ValueError(f"airfoil {self.name!r}: alpha must be strictly increasing")
+        if abs(a[0] + 180.0) > 1e-9 or abs(a[-1] - 180.0) > 1e-9:
+            raise ValueError(f"airfoil {self.name!r}: alpha must run from -180 to 180 deg, "
+                             f"got {a[0]} .. {a[-1]}")
+
+
+class AirfoilArrays(NamedTuple):
+    """Uniform-grid coefficients for :func:`airfoil_coefficients`.
+
+    The field order matches the kernel's trailing arguments, so
+    ``airfoil_coefficients(alpha, mach, *arrays)`` works.
+
+    Attributes
+    ----------
+    alpha0_rad : float
+        First grid angle, -pi [rad].
+    dalpha_rad : float
+        Grid step [rad].
+    cl, cd, cm : ndarray of float64
+        Coefficients [-] at ``alpha0_rad + i * dalpha_rad``, i = 0..n (the last
+        point is +pi and equals the first).
+    """
+
+    alpha0_rad: float
+    dalpha_rad: float
+    cl: np.ndarray
+    cd: np.ndarray
+    cm: np.ndarray
+
+
+def load_airfoil(name: str = "naca0012_critzos") -> AirfoilTable:
+    """Read a shipped table from ``assets/airfoils``.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`AIRFOIL_FILES`: ``"naca0012_critzos"`` (default; NACA TN 3361,
+        Re 1.8e6, Cl/Cd/Cm) or ``"naca0012_sheldahl360k"`` (SAND80-2114, Re 3.6e5, no Cm).
+
+    Returns
+    -------
+    AirfoilTable
+
+    Raises
+    ------
+    ValueError
+        Unknown name (the message lists the available names) or invalid table.
+    """
+    if name not in AIRFOIL_FILES:
+        raise ValueError(f"unknown airfoil {name!r}; available: {', '.join(sorted(AIRFOIL_FILES))}")
+    origin, rows = "", []
+    for line in (AIRFOIL_DIR / AIRFOIL_FILES[name]).read_text(encoding="utf-8").splitlines():
+        line = line.strip()
+        if line.startswith("#"):
+            origin = origin or line[1:].strip()
+        elif line:
+            rows.append([float(v) for v in line.replace(",", " ").split()])
+    data = np.array(rows, dtype=float)
+    if data.ndim != 2 or data.shape[1] not in (3, 4):
+        raise ValueError(f"airfoil {name!r}: expected 3 or 4 columns (alpha, Cl, Cd[, Cm])")
+    has_cm = data.shape[1] == 4
+    cm = data[:, 3] if has_cm else np.zeros(len(data))
+    return AirfoilTable(name, origin, tuple(data[:, 0]), tuple(data[:, 1]), tuple(data[:, 2]),
+                        tuple(cm), has_cm)
+
+
+def compile_airfoil(table: AirfoilTable, step_deg: float = 0.25) -> AirfoilArrays:
+    """Resample a table onto a uniform periodic grid over [-180, 180] deg.
+
+    Each coefficient is interpolated with a shape-preserving PCHIP
+    (``scipy.interpolate.PchipInterpolator``: no overshoot, e.g. at the abrupt
+    Critzos stall drop 14 -> 15 deg). If the -180 and +180 rows differ they are
+    averaged; the table is then repeated at -360/+360 deg before fitting so the
+    interpolant and its slope are periodic across +/-180 deg. With the default
+    0.25 deg step every integer-degree table point is a grid point, so table
+    values are reproduced exactly by the linear lookup.
+
+    Parameters
+    ----------
+    table : AirfoilTable
+    step_deg : float
+        Grid step [deg]; must divide 360.
+
+    Returns
+    -------
+    AirfoilArrays
+    """
+    n = int(round(360.0 / step_deg))
+    if step_deg <= 0.0 or abs(n * step_deg - 360.0) > 1e-9:
+        raise ValueError(f"step_deg must divide 360, got {step_deg}")
+    a = np.asarray(table.alpha_deg)[:-1]  # drop +180, it is -180 + 360
+    a_ext = np.concatenate((a - 360.0, a, a + 360.0))
+    grid_deg = -180.0 + step_deg * np.arange(n + 1)
+    grids = []
+    for col in (table.cl, table.cd, table.cm):
+        y = np.array(col, dtype=float)
+        y[0] = 0.5 * (y[0] + y[-1])
+        y = y[:-1]
+        g = PchipInterpolator(a_ext, np.concatenate((y, y, y)))(grid_deg)
+        g[-1] = g[0]
+        grids.append(np.ascontiguousarray(g, dtype=np.float64))
+    return AirfoilArrays(-math.pi, math.radians(step_deg), *grids)
+
+
+@kernel
+def airfoil_coefficients(alpha_rad, mach, alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid):
+    """Section Cl, Cd, Cm at an angle of attack and Mach number (jitted).
+
+    Alpha is wrapped into [-pi, pi) and the uniform grid of :func:`compile_airfoil`
+    is interpolated linearly (index computed directly, no search).
+
+    Mach correction (the only one): Prandtl-Glauert factor ``1/sqrt(1 - M^2)``
+    on Cl in the attached-flow range only, with M clipped to [0, 0.7] inside
+    the factor: full factor for |alpha| <= 10 deg, fading linearly to none at
+    |alpha| = 20 deg, none beyond. The reverse-flow attached range about
+    +/-180 deg is NOT corrected. Cd and Cm get no Mach correction: NACA 0012
+    drag divergence is near M 0.75, above the tip Mach (~0.5) of the rotors in
+    scope, and the tables give no compressible Cm data.
+
+    Parameters
+    ----------
+    alpha_rad : float
+        Angle of attack [rad], any value (wrapped).
+    mach : float
+        Local Mach number [-].
+    alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid
+        The fields of :class:`AirfoilArrays` ([rad], [rad], [-], [-], [-]).
+
+    Returns
+    -------
+    cl, cd, cm : float
+        Lift, drag and quarter-chord moment coefficients [-].
+    """
+    two_pi = 2.0 * math.pi
+    a = alpha_rad - two_pi * math.floor((alpha_rad + math.pi) / two_pi)
+    x = (a - alpha0_rad) / dalpha_rad
+    i = int(math.floor(x))
+    n = cl_grid.shape[0]
+    if i < 0:
+        i = 0
+    elif i > n - 2:
+        i = n - 2
+    t = x - i
+    cl = cl_grid[i] + t * (cl_grid[i + 1] - cl_grid[i])
+    cd = cd_grid[i] + t * (cd_grid[i + 1] - cd_grid[i])
+    cm = cm_grid[i] + t * (cm_grid[i + 1] - cm_grid[i])
+    m = min(max(mach, 0.0), MACH_CLIP)
+    if m > 0.0:
+        abs_deg = abs(a) * (180.0 / math.pi)
+        if abs_deg < PG_NONE_DEG:
+            f = 1.0 / math.sqrt(1.0 - m * m)
+            if abs_deg <= PG_FULL_DEG:
+                cl *= f
+            else:
+                cl *= 1.0 + (PG_NONE_DEG - abs_deg) / (PG_NONE_DEG - PG_FULL_DEG) * (f - 1.0)
+    return cl, cd, cm
+
+
+@kernel
+def _coefficients_many(alpha_rad, mach, alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid):
+    n = alpha_rad.shape[0]
+    out = np.empty((3, n))
+    for k in range(n):
+        out[0, k], out[1, k], out[2, k] = airfoil_coefficients(
+            alpha_rad[k], mach[k], alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid)
+    return out
+
+
+def coefficients(table_arrays: AirfoilArrays, alpha_rad, mach=0.0):
+    """Vectorised :func:`airfoil_coefficients` for plots and reports (not for kernels).
+
+    Parameters
+    ----------
+    table_arrays : AirfoilArrays
+    alpha_rad : float or array_like
+        Angle of attack [rad].
+    mach : float or array_like
+        Mach number [-], broadcast against ``alpha_rad``.
+
+    Returns
+    -------
+    cl, cd, cm : ndarray (or float for scalar inputs)
+        Coefficients [-] with the broadcast shape of the inputs.
+    """
+    a, m = np.broadcast_arrays(np.asarray(alpha_rad, dtype=float), np.asarray(mach, dtype=float))
+    out = _coefficients_many(np.ascontiguousarray(a).ravel(), np.ascontiguousarray(m).ravel(),
+                             *table_arrays)
+    if a.ndim == 0:
+        return float(out[0, 0]), float(out[1, 0]), float(out[2, 0])
+    return tuple(out[j].reshape(a.shape) for j in range(3))

@@ -1,0 +1,270 @@
+"""Jitted right-hand side and time stepping of the aeroelastic rotor (no Python objects inside).
+
+Blade element aerodynamics per station (paper §2.1, eq. 1): inflow angle ``phi = atan2(U_P, U_T)``
+with ``U_P`` positive for flow coming up through the disc, ``alpha = theta + phi`` evaluated with
+the 3/4-chord pitch-rate term, lift/drag/moment from the full-range table (reverse flow handled by
+the ±180° data, not clipped). Unsteady option: Theodorsen in the time domain, the velocity normal to
+the chord lagged by R.T. Jones' two-state approximation of Wagner's function; Theodorsen's
+non-circulatory terms (apparent mass in the mass matrix, pitch-rate lift and moment here).
+Induced velocity: Pitt-Peters uniform inflow ``(8/3) rho R^3 v0' + 2 rho pi R^2 V_m v0 = T``
+(model-notes §3 erratum of eq. 7) with the turbulent-wake treatment of :func:`mass_flow`.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .airfoil import airfoil_coefficients
+from .jit import kernel
+from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_Y_FIXED, P_A_SOUND,
+                    P_AERO, P_ALPHA_S, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
+                    P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_VH, S_A, S_C, S_R,
+                    S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD,
+                    Y_ZETA0, Y_ZETAD0)
+
+A1, A2 = WAGNER_A
+B1, B2 = WAGNER_B
+
+#: Empirical induced velocity in the vortex-ring / turbulent-wake region (Leishman 2006, as in
+#: physics-reference §4.6): v/v_h = K0 + K1 x + K2 x^2 + K3 x^3 + K4 x^4, x = V_c/v_h in [-2, 0].
+EMP_K = (1.15, -1.125, -1.372, -1.718, -0.655)
+EMP_BLEND = 0.1  # width in x over which the curve is blended into momentum theory at -2 and 0
+
+# history columns written by advance()
+HISTORY_COLUMNS = ("t_s", "azimuth_rad", "omega_rad_s", "teeter_rad", "tip_twist_0_rad",
+                   "tip_twist_1_rad", "tip_flap_0_m", "tip_flap_1_m", "descent_rate_m_s",
+                   "inflow_m_s", "thrust_n", "torque_nm", "lag_0_rad", "lag_1_rad",
+                   "vertical_force_n", "horizontal_force_n")
+N_HIST = len(HISTORY_COLUMNS)
+
+
+@kernel
+def mass_flow(thrust, vx, vc, v0, rho, area):
+    """Mass-flow velocity V_m [m/s] of the uniform inflow equation.
+
+    Momentum theory ``sqrt(Vx^2 + (Vc + v0)^2)`` outside the turbulent-wake region; inside
+    (-2 <= Vc/v_h <= 0, ``Vc`` the climb velocity normal to the disc) V_m is set so that the steady
+    inflow equals the empirical curve: ``V_m = sqrt(Vx^2 + (v_h^2 / v_emp)^2)``, blended linearly
+    into momentum theory over EMP_BLEND outside both ends."""
+    vh = math.sqrt(max(abs(thrust), 1.0) / (2.0 * rho * area))
+    mom = math.sqrt(vx * vx + (vc + v0) ** 2)
+    x = vc / vh
+    if x <= -2.0 - EMP_BLEND or x >= EMP_BLEND:
+        return max(mom, 1e-3 * vh)
+    xc = min(max(x, -2.0), 0.0)
+    poly = EMP_K[0] + xc * (EMP_K[1] + xc * (EMP_K[2] + xc * (EMP_K[3] + xc * EMP_K[4])))
+    emp = math.sqrt(vx * vx + (vh / poly) ** 2)
+    w = min(1.0, (x + 2.0 + EMP_BLEND) / EMP_BLEND, (EMP_BLEND - x) / EMP_BLEND)
+    return max(w * emp + (1.0 - w) * mom, 1e-3 * vh)
+
+
+@kernel
+def rhs(y, dy, m, loads, work):
+    """dy = f(y). ``m`` is a ModelArrays; ``loads`` receives thrust, torque etc.; ``work`` >= 2 n_s."""
+    p = m.p
+    nq = int(p[P_NQ]); nst = int(p[P_NST]); ns = int(p[P_NS])
+    rho = p[P_RHO]; R = p[P_R]; r0 = p[P_R0]
+    theo = p[P_AERO] > 0.5 and p[P_QUASI_STATIC] < 0.5
+    om = y[Y_OMEGA]; vd = y[Y_VD]; v0 = y[Y_V0]; psi = y[Y_PSI]
+    x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns; a0 = N_Y_FIXED + 2 * ns
+    beta = y[x0]; betad = y[xd0]
+    ca = math.cos(p[P_ALPHA_S]); sa = math.sin(p[P_ALPHA_S])
+    vh_air = p[P_VH]
+    vup = vd * ca + vh_air * sa  # free stream up through the disc
+    vx = vh_air * ca - vd * sa  # free stream in the disc plane, towards psi = 0 (tail)
+    for i in range(ns):
+        work[i] = 0.0
+    thrust = 0.0; torque = 0.0; hforce = 0.0
+    lagm0 = 0.0; lagm1 = 0.0
+    a_sound = p[P_A_SOUND]
+    for b in range(2):
+        sgn = 1.0 - 2.0 * b
+        psib = psi + b * math.pi
+        sp = math.sin(psib); cp = math.cos(psib)
+        zd = y[Y_ZETAD0 + b]
+        qoff = 1 + b * nq
+        for j in range(nst):
+            r = m.st[j, S_R]; c = m.st[j, S_C]; xea = m.st[j, S_XEA]
+            wdot = sgn * betad * r; wp = sgn * beta; th = 0.0; thd = 0.0
+            for k in range(nq):
+                qk = y[x0 + qoff + k]; qdk = y[xd0 + qoff + k]
+                wdot += m.phw[j, k] * qdk
+                wp += m.dphw[j, k] * qk
+                th += m.pht[j, k] * qk
+                thd += m.pht[j, k] * qdk
+            ut = om * r + vx * sp + (r - r0) * zd
+            up = vup - v0 - wdot - vx * cp * wp
+            theta = m.st[j, S_THETA0] + th
+            v = math.sqrt(ut * ut + up * up) + 1e-9
+            aqs = theta + math.atan2(up + thd * (0.75 - xea) * c, ut)
+            ia = a0 + 2 * (b * nst + j)
+            if theo:
+                wn = v * math.sin(aqs); uc = v * math.cos(aqs)
+                x1 = y[ia]; x2 = y[ia + 1]
+                aeff = math.atan2((1.0 - A1 - A2) * wn + x1 + x2, uc)
+                rate = 2.0 * v / c
+                dy[ia] = rate * B1 * (A1 * wn - x1)
+                dy[ia + 1] = rate * B2 * (A2 * wn - x2)
+            else:
+                aeff = aqs
+                dy[ia] = 0.0
+                dy[ia + 1] = 0.0
+            cl, cd, cm = airfoil_coefficients(aeff, v / a_sound, m.af_alpha0, m.af_dalpha,
+                                              m.af_cl, m.af_cd, m.af_cm)
+            qdyn = 0.5 * rho * v * v
+            lift = qdyn * c * cl; drag = qdyn * c * cd
+            hb = 0.5 * c
+            fup = (lift * ut + drag * up) / v + math.pi * rho * hb * hb * v * thd
+            ffwd = (lift * up - drag * ut) / v
+            cn = cl * math.cos(aeff) + cd * math.sin(aeff)
+            mea = qdyn * c * c * (cm + (xea - m.st[j, S_XAC]) * cn) \
+                - math.pi * rho * hb * hb * hb * v * (0.5 - m.st[j, S_A]) * thd
+            wgt = m.st[j, S_W]
+            fz = fup * wgt; my = mea * wgt
+            work[0] += sgn * r * fz
+            for k in range(nq):
+                work[qoff + k] += m.phw[j, k] * fz + m.pht[j, k] * my
+            thrust += fz
+            torque += r * ffwd * wgt
+            if b == 0:
+                lagm0 += (r - r0) * ffwd * wgt
+            else:
+                lagm1 += (r - r0) * ffwd * wgt
+            hforce += (-ffwd * sp - fup * wp * cp) * wgt
+    # structure: x'' = M^-1 (Q - (K0 + Omega^2 K2) x)
+    om2 = om * om
+    for i in range(ns):
+        f = work[i]
+        for k in range(ns):
+            f -= (m.k0[i, k] + om2 * m.k2[i, k]) * y[x0 + k]
+        work[ns + i] = f
+    for i in range(ns):
+        acc = 0.0
+        for k in range(ns):
+            acc += m.minv[i, k] * work[ns + k]
+        dy[x0 + i] = y[xd0 + i]
+        dy[xd0 + i] = acc
+    # rotor speed and lag
+    klag = p[P_KLAG] + om2 * p[P_K2LAG]
+    f0 = torque; f1 = lagm0 - klag * y[Y_ZETA0]; f2 = lagm1 - klag * y[Y_ZETA0 + 1]
+    dy[Y_PSI] = om
+    if p[P_HOLD_OMEGA] > 0.5:
+        dy[Y_OMEGA] = 0.0
+        dy[Y_ZETAD0] = f1 / p[P_ILAG]
+        dy[Y_ZETAD0 + 1] = f2 / p[P_ILAG]
+    else:
+        li = m.lag_inv
+        dy[Y_OMEGA] = li[0, 0] * f0 + li[0, 1] * f1 + li[0, 2] * f2
+        dy[Y_ZETAD0] = li[1, 0] * f0 + li[1, 1] * f1 + li[1, 2] * f2
+        dy[Y_ZETAD0 + 1] = li[2, 0] * f0 + li[2, 1] * f1 + li[2, 2] * f2
+    dy[Y_ZETA0] = y[Y_ZETAD0]
+    dy[Y_ZETA0 + 1] = y[Y_ZETAD0 + 1]
+    # vehicle descent and inflow
+    fvert = thrust * ca - hforce * sa
+    fhoriz = thrust * sa + hforce * ca
+    dy[Y_VD] = 0.0 if p[P_HOLD_VD] > 0.5 else p[P_G] - fvert / p[P_MASS]
+    area = math.pi * R * R
+    vm = mass_flow(thrust, vx, -vup, v0, rho, area)
+    dy[Y_V0] = (thrust - 2.0 * rho * area * vm * v0) * 3.0 / (8.0 * rho * R * R * R)
+    loads[L_THRUST] = thrust; loads[L_TORQUE] = torque; loads[L_HFORCE] = hforce
+    loads[L_FVERT] = fvert; loads[L_FHORIZ] = fhoriz; loads[L_VM] = vm
+
+
+@kernel
+def steady_wagner_states(y, m):
+    """Set the Wagner lag states to their steady values A_k * w_n for the current state."""
+    p = m.p
+    nq = int(p[P_NQ]); nst = int(p[P_NST]); ns = int(p[P_NS])
+    x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns; a0 = N_Y_FIXED + 2 * ns
+    ca = math.cos(p[P_ALPHA_S]); sa = math.sin(p[P_ALPHA_S])
+    vup = y[Y_VD] * ca + p[P_VH] * sa
+    vx = p[P_VH] * ca - y[Y_VD] * sa
+    for b in range(2):
+        sgn = 1.0 - 2.0 * b
+        psib = y[Y_PSI] + b * math.pi
+        qoff = 1 + b * nq
+        for j in range(nst):
+            r = m.st[j, S_R]; c = m.st[j, S_C]
+            wdot = sgn * y[xd0] * r; wp = sgn * y[x0]; th = 0.0; thd = 0.0
+            for k in range(nq):
+                wdot += m.phw[j, k] * y[xd0 + qoff + k]
+                wp += m.dphw[j, k] * y[x0 + qoff + k]
+                th += m.pht[j, k] * y[x0 + qoff + k]
+                thd += m.pht[j, k] * y[xd0 + qoff + k]
+            ut = y[Y_OMEGA] * r + vx * math.sin(psib) + (r - p[P_R0]) * y[Y_ZETAD0 + b]
+            up = vup - y[Y_V0] - wdot - vx * math.cos(psib) * wp
+            v = math.sqrt(ut * ut + up * up) + 1e-9
+            aqs = m.st[j, S_THETA0] + th + math.atan2(up + thd * (0.75 - m.st[j, S_XEA]) * c, ut)
+            wn = v * math.sin(aqs)
+            ia = a0 + 2 * (b * nst + j)
+            y[ia] = A1 * wn
+            y[ia + 1] = A2 * wn
+
+
+@kernel
+def record_row(t, y, m, loads, row):
+    p = m.p
+    nq = int(p[P_NQ]); ns = int(p[P_NS])
+    x0 = N_Y_FIXED
+    row[0] = t; row[1] = y[Y_PSI]; row[2] = y[Y_OMEGA]; row[3] = y[x0]
+    R = p[P_R]
+    for b in range(2):
+        tw = 0.0; fl = (1.0 - 2.0 * b) * y[x0] * R
+        for k in range(nq):
+            fl += m.tip[0, k] * y[x0 + 1 + b * nq + k]
+            tw += m.tip[1, k] * y[x0 + 1 + b * nq + k]
+        row[4 + b] = tw
+        row[6 + b] = fl
+    row[8] = y[Y_VD]; row[9] = y[Y_V0]; row[10] = loads[L_THRUST]; row[11] = loads[L_TORQUE]
+    row[12] = y[Y_ZETA0]; row[13] = y[Y_ZETA0 + 1]; row[14] = loads[L_FVERT]; row[15] = loads[L_FHORIZ]
+    ns = ns  # layout marker
+
+
+@kernel
+def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
+    """RK4 for ``n_steps`` from time ``t0``; every ``record_every`` steps a history row and the full
+    state are written. Returns (steps done, rows written, status): status 0 ok, 1 non-finite state,
+    2 rotor speed below ``omega_floor``. ``y`` is advanced in place."""
+    n = y.shape[0]
+    ns = int(m.p[P_NS])
+    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); yt = np.empty(n)
+    loads = np.zeros(8); work = np.empty(2 * ns + 2)
+    rows = 0
+    status = 0
+    done = 0
+    for s in range(n_steps):
+        rhs(y, k1, m, loads, work)
+        if s % record_every == 0 and rows < hist.shape[0]:
+            record_row(t0 + s * dt, y, m, loads, hist[rows])
+            states[rows, :] = y
+            rows += 1
+        for i in range(n):
+            yt[i] = y[i] + 0.5 * dt * k1[i]
+        rhs(yt, k2, m, loads, work)
+        for i in range(n):
+            yt[i] = y[i] + 0.5 * dt * k2[i]
+        rhs(yt, k3, m, loads, work)
+        for i in range(n):
+            yt[i] = y[i] + dt * k3[i]
+        rhs(yt, k4, m, loads, work)
+        finite = True
+        for i in range(n):
+            y[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+            if not math.isfinite(y[i]):
+                finite = False
+        done = s + 1
+        if not finite:
+            status = 1
+            break
+        if y[Y_OMEGA] < omega_floor:
+            status = 2
+            break
+    return done, rows, status
+
+
+@kernel
+def evaluate(y, m, dy, loads):
+    """One right-hand-side evaluation (for trim residuals, Jacobians and tests)."""
+    work = np.empty(2 * int(m.p[P_NS]) + 2)
+    rhs(y, dy, m, loads, work)

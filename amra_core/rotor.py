@@ -1,0 +1,207 @@
+"""Validated description of a two-bladed teetering rotor and its blade sections.
+
+Everything is SI: metres, kilograms, radians, N m^2. Chordwise positions
+(elastic axis ``x_ea``, centre of gravity ``x_cg``, aerodynamic centre ``x_ac``)
+are fractions of the local chord measured from the leading edge. Station arrays
+run root to tip, with ``r_m`` measured from the rotor axis.
+
+Objects are frozen and hashable (arrays are stored as tuples) so a case can be
+keyed by its parameters; :meth:`Rotor.with_overrides` gives the uniform GJ, EA
+and CG overrides that the dashboard sliders set.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace, asdict
+from typing import Optional
+
+import numpy as np
+
+
+class RotorError(ValueError):
+    """A rotor description is invalid. The message names field, value and allowed range."""
+
+
+def _fail(name: str, value, allowed: str):
+    raise RotorError(f"{name} = {value!r} is not allowed: {allowed}")
+
+
+def _check_number(name: str, value, lo=None, hi=None, lo_open=False, hi_open=False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
+        _fail(name, value, "must be a number")
+    v = float(value)
+    if not math.isfinite(v):
+        _fail(name, value, "must be finite")
+    rng = f"{'(' if lo_open else '['}{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}{')' if hi_open else ']'}"
+    if lo is not None and (v < lo or (lo_open and v == lo)):
+        _fail(name, value, f"must lie in {rng}")
+    if hi is not None and (v > hi or (hi_open and v == hi)):
+        _fail(name, value, f"must lie in {rng}")
+    return v
+
+
+#: Station fields: name -> (lower bound, lower bound open?, upper bound, unit/meaning)
+STATION_FIELDS = {
+    "r_m": (0.0, False, None, "radius from the rotor axis [m]"),
+    "chord_m": (0.0, True, None, "chord [m]"),
+    "twist_rad": (-math.pi / 4, False, math.pi / 4, "built-in twist, nose-up positive [rad]"),
+    "mass_kg_m": (0.0, True, None, "mass per length [kg/m]"),
+    "torsional_inertia_kg_m": (0.0, True, None, "torsional inertia per length about the EA [kg m^2/m]"),
+    "gj_nm2": (0.0, True, None, "torsional stiffness [N m^2/rad]"),
+    "ei_flap_nm2": (0.0, True, None, "flapwise bending stiffness [N m^2]"),
+    "ei_lag_nm2": (0.0, True, None, "lagwise bending stiffness [N m^2]"),
+    "x_ea": (0.0, False, 1.0, "elastic axis [fraction of chord from the leading edge]"),
+    "x_cg": (0.0, False, 1.0, "centre of gravity [fraction of chord from the leading edge]"),
+    "x_ac": (0.0, False, 1.0, "aerodynamic centre [fraction of chord from the leading edge]"),
+}
+
+
+@dataclass(frozen=True)
+class BladeStations:
+    """Spanwise blade properties at stations, root to tip; linear between stations."""
+
+    r_m: tuple
+    chord_m: tuple
+    twist_rad: tuple
+    mass_kg_m: tuple
+    torsional_inertia_kg_m: tuple
+    gj_nm2: tuple
+    ei_flap_nm2: tuple
+    ei_lag_nm2: tuple
+    x_ea: tuple
+    x_cg: tuple
+    x_ac: tuple
+
+    def __post_init__(self):
+        n = None
+        for name, (lo, lo_open, hi, _) in STATION_FIELDS.items():
+            raw = getattr(self, name)
+            if isinstance(raw, (int, float)):
+                _fail(f"stations.{name}", raw, "must be a list with one value per station")
+            vals = tuple(
+                _check_number(f"stations.{name}[{i}]", v, lo, hi, lo_open) for i, v in enumerate(raw)
+            )
+            object.__setattr__(self, name, vals)
+            if n is None:
+                n = len(vals)
+                if n < 2:
+                    _fail(f"stations.{name}", list(raw), "needs at least 2 stations (root and tip)")
+            elif len(vals) != n:
+                _fail(f"stations.{name}", list(raw), f"must have {n} values, one per station (as r_m)")
+        r = self.r_m
+        for i in range(1, len(r)):
+            if not r[i] > r[i - 1]:
+                _fail(f"stations.r_m[{i}]", r[i], f"stations must be in increasing order of radius (> {r[i - 1]})")
+
+    def array(self, name: str) -> np.ndarray:
+        return np.asarray(getattr(self, name), dtype=float)
+
+    def at(self, name: str, r) -> np.ndarray:
+        """Property ``name`` linearly interpolated at radius ``r`` [m]."""
+        return np.interp(r, self.r_m, getattr(self, name))
+
+    def mean(self, name: str) -> float:
+        """Span-average of a property over the stations' extent (trapezoidal)."""
+        r, v = self.array("r_m"), self.array(name)
+        return float(np.trapezoid(v, r) / (r[-1] - r[0]))
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """An optional concentrated mass on each blade (e.g. tip weight)."""
+
+    r_m: float
+    mass_kg: float
+    x_chord: float = 0.25  #: chordwise position [fraction of chord from the leading edge]
+
+    def validate(self, radius_m: float, root_m: float):
+        _check_number("point_mass.r_m", self.r_m, root_m, radius_m)
+        _check_number("point_mass.mass_kg", self.mass_kg, 0.0, None)
+        _check_number("point_mass.x_chord", self.x_chord, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class Rotor:
+    """A two-bladed teetering rotor in autorotation, plus the vehicle it carries.
+
+    Attributes (SI): ``radius_m`` tip radius; ``root_cutout_m`` radius where the
+    flexible, lifting blade begins (clamped there to the rigid hub bar);
+    ``incidence_rad`` fixed blade pitch at the root (nose up); hub teeter and
+    polar inertias [kg m^2]; ``vehicle_mass_kg`` weight carried by the rotor.
+    """
+
+    name: str
+    radius_m: float
+    root_cutout_m: float
+    n_blades: int
+    incidence_rad: float
+    vehicle_mass_kg: float
+    hub_teeter_inertia_kg_m2: float
+    hub_polar_inertia_kg_m2: float
+    stations: BladeStations
+    point_mass: Optional[PointMass] = None
+    airfoil: str = "naca0012_critzos"
+    sources: tuple = field(default=(), compare=False, hash=False)
+
+    def __post_init__(self):
+        R = _check_number("radius_m", self.radius_m, 0.0, 50.0, lo_open=True)
+        r0 = _check_number("root_cutout_m", self.root_cutout_m, 0.0, 0.8 * R, hi_open=True)
+        if self.n_blades != 2:
+            _fail("n_blades", self.n_blades, "must be 2 (AMRA models a two-bladed teetering rotor)")
+        _check_number("incidence_rad", self.incidence_rad, -math.radians(20), math.radians(20))
+        _check_number("vehicle_mass_kg", self.vehicle_mass_kg, 0.0, 1e5, lo_open=True)
+        _check_number("hub_teeter_inertia_kg_m2", self.hub_teeter_inertia_kg_m2, 0.0, None)
+        _check_number("hub_polar_inertia_kg_m2", self.hub_polar_inertia_kg_m2, 0.0, None)
+        r = self.stations.r_m
+        if abs(r[0] - r0) > 1e-9:
+            _fail("stations.r_m[0]", r[0], f"the first station must be at the root cut-out ({r0} m)")
+        if abs(r[-1] - R) > 1e-9:
+            _fail(f"stations.r_m[{len(r) - 1}]", r[-1], f"the last station must be at the tip radius ({R} m)")
+        if self.point_mass is not None:
+            self.point_mass.validate(R, r0)
+
+    # -- derived quantities -------------------------------------------------
+    @property
+    def blade_length_m(self) -> float:
+        return self.radius_m - self.root_cutout_m
+
+    @property
+    def disc_area_m2(self) -> float:
+        return math.pi * self.radius_m**2
+
+    def with_overrides(self, gj_nm2=None, x_ea=None, x_cg=None, ei_flap_nm2=None) -> "Rotor":
+        """A copy with uniform GJ [N m^2/rad], EA and CG [chord fraction] along the span."""
+        n = len(self.stations.r_m)
+        changes = {}
+        if gj_nm2 is not None:
+            changes["gj_nm2"] = (_check_number("gj_nm2", gj_nm2, 0.0, None, lo_open=True),) * n
+        if ei_flap_nm2 is not None:
+            changes["ei_flap_nm2"] = (_check_number("ei_flap_nm2", ei_flap_nm2, 0.0, None, lo_open=True),) * n
+        if x_ea is not None:
+            changes["x_ea"] = (_check_number("ea (x_ea)", x_ea, 0.0, 1.0),) * n
+        if x_cg is not None:
+            changes["x_cg"] = (_check_number("cg (x_cg)", x_cg, 0.0, 1.0),) * n
+        if not changes:
+            return self
+        return replace(self, stations=replace(self.stations, **changes))
+
+    def to_dict(self) -> dict:
+        """The resolved rotor as the solver uses it (SI, chord fractions, root to tip)."""
+        st = {k: list(getattr(self.stations, k)) for k in STATION_FIELDS}
+        out = {
+            "name": self.name,
+            "radius_m": self.radius_m,
+            "root_cutout_m": self.root_cutout_m,
+            "chord_m": self.stations.mean("chord_m"),
+            "n_blades": self.n_blades,
+            "incidence_rad": self.incidence_rad,
+            "vehicle_mass_kg": self.vehicle_mass_kg,
+            "hub_teeter_inertia_kg_m2": self.hub_teeter_inertia_kg_m2,
+            "hub_polar_inertia_kg_m2": self.hub_polar_inertia_kg_m2,
+            "airfoil": self.airfoil,
+            "point_mass": asdict(self.point_mass) if self.point_mass else None,
+            "stations": st,
+        }
+        if self.sources:
+            out["sources"] = dict(self.sources)
+        return out

@@ -1,0 +1,348 @@
+"""Trim: steady autorotation for the flight condition.
+
+* Axial flight (time-invariant): solve ``f(y) = 0`` of the full nonlinear model for rotor speed,
+  descent rate, inflow, lag and the static blade deflections (thrust = weight, torque = 0).
+* Forward flight (periodic): the blade motion is converged by marching with rotor speed and
+  descent rate held, and the revolution-averaged residuals (torque, vertical and horizontal rotor
+  force of a gliding isolated rotor) are driven to zero over rotor speed, descent rate and shaft
+  tilt by a Newton iteration on those averages.
+* ``omega_hold_rad_s`` (paper Table 1): rotor speed held at the given value; axial: descent rate
+  for thrust = weight; forward: level flight (descent 0) with the shaft tilt for lift = weight.
+
+When no steady autorotation exists, :class:`TrimResult` says ``no-autorotation``, why, and the
+last converged point of a continuation in GJ from a stiffer blade (where the trim branch ended).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Optional
+
+import numpy as np
+from scipy.optimize import root
+
+from . import kernels
+from .model import (L_FHORIZ, L_FVERT, L_THRUST, L_TORQUE, N_Y_FIXED, CompiledModel, Y_OMEGA,
+                    Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step)
+
+MU_RANGE = (0.0, 0.5)
+
+
+@dataclass
+class TrimResult:
+    """Outcome of a trim. ``status``: ``trimmed`` or ``no-autorotation`` (then ``reason`` and
+    ``branch_end`` say why and where the continuation stopped)."""
+
+    status: str
+    state: Optional[np.ndarray] = None
+    omega_rad_s: float = float("nan")
+    descent_rate_m_s: float = float("nan")
+    disk_tilt_rad: float = 0.0
+    airspeed_m_s: float = 0.0
+    inflow_m_s: float = float("nan")
+    thrust_n: float = float("nan")
+    torque_nm: float = float("nan")
+    teeter_amplitude_rad: float = 0.0
+    tip_twist_rad: float = 0.0
+    reason: str = ""
+    branch_end: dict = field(default_factory=dict)
+    model: Optional[CompiledModel] = None
+
+    @property
+    def ok(self) -> bool:
+        return self.status == "trimmed"
+
+    @property
+    def mu(self) -> float:
+        if not self.ok:
+            return float("nan")
+        return self.airspeed_m_s * math.cos(self.disk_tilt_rad) / (self.omega_rad_s * self.model.rotor.radius_m)
+
+    def to_dict(self) -> dict:
+        out = {k: getattr(self, k) for k in ("status", "omega_rad_s", "descent_rate_m_s", "disk_tilt_rad",
+                                             "airspeed_m_s", "inflow_m_s", "thrust_n", "torque_nm",
+                                             "teeter_amplitude_rad", "tip_twist_rad")}
+        out["mu"] = self.mu
+        out = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in out.items()}
+        if not self.ok:
+            out["reason"] = self.reason
+            out["branch_end"] = self.branch_end
+        return out
+
+
+def _hover_induced(model: CompiledModel) -> float:
+    r = model.rotor
+    return math.sqrt(r.vehicle_mass_kg * model.flight.gravity_m_s2 / (2 * model.flight.density_kg_m3 * r.disc_area_m2))
+
+
+def _steady_inflow_guess(x: float) -> float:
+    """Steady induced velocity / v_h at descent ratio x = V_c / v_h (x < 0): the empirical curve
+    inside [-2, 0], the physical windmill-brake root of momentum theory below -2."""
+    if x >= -2.0:
+        k = kernels.EMP_K
+        return k[0] + x * (k[1] + x * (k[2] + x * (k[3] + x * k[4])))
+    return -x / 2 - math.sqrt(x * x / 4 - 1.0)
+
+
+def trim_axial(model: CompiledModel, guess: Optional[np.ndarray] = None, omega_hold: Optional[float] = None) -> TrimResult:
+    """Steady axial autorotation (or, with ``omega_hold``, thrust = weight at that rotor speed).
+
+    Without a ``guess`` state, several starting descent rates on the physical inflow branch are
+    tried (near ideal autorotation, x = V_c/v_h = -1.9, and deeper in the windmill state)."""
+    if guess is not None:
+        res = _trim_axial_from(model, guess, omega_hold)
+        if res.ok:
+            return res
+    vh = _hover_induced(model)
+    res = None
+    for ratio in (1.91, 1.85, 1.97, 2.3, 2.8, 3.5):
+        y0 = np.zeros(model.n_y) if guess is None else guess.copy()
+        y0[Y_OMEGA] = omega_hold or (omega_guess(model) if guess is None else guess[Y_OMEGA])
+        y0[Y_VD] = ratio * vh
+        y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
+        res = _trim_axial_from(model, y0, omega_hold)
+        if res.ok:
+            return res
+    return res
+
+
+def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[float]) -> TrimResult:
+    m = model.with_controls(alpha_s_rad=0.0, airspeed_m_s=0.0, quasi_static=True,
+                            hold_omega=omega_hold is not None, hold_vd=False)
+    a = m.arrays
+    xs = m.x_slice()
+    vh = _hover_induced(m)
+    y0 = y0.copy()
+    y0[m.xd_slice()] = 0.0
+    y0[4 + 2:8] = 0.0
+    dy = np.zeros(m.n_y); loads = np.zeros(8)
+    free_omega = omega_hold is None
+    if not free_omega:
+        y0[Y_OMEGA] = omega_hold
+
+    def unpack(z):
+        y = y0.copy()
+        i = 0
+        if free_omega:
+            y[Y_OMEGA] = z[0]; i = 1
+        y[Y_VD], y[Y_V0] = z[i], z[i + 1]
+        y[4:6] = z[i + 2:i + 4]
+        y[xs] = z[i + 4:]
+        return y
+
+    def resid(z):
+        y = unpack(z)
+        kernels.evaluate(y, a, dy, loads)
+        out = [dy[Y_OMEGA]] if free_omega else []
+        out += [dy[Y_VD], dy[Y_V0], dy[6], dy[7]]
+        return np.concatenate([out, dy[m.xd_slice()]])
+
+    z0 = np.concatenate([[y0[Y_OMEGA]] if free_omega else [], [y0[Y_VD], y0[Y_V0]], y0[4:6], y0[xs]])
+    sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
+    y = unpack(sol.x)
+    res = np.abs(resid(sol.x))
+    omega = y[Y_OMEGA]
+    ok = sol.success or res.max() < 1e-6
+    # momentum theory's second windmill root (far wake flowing down) is unphysical and unstable
+    windmill_unphysical = (-y[Y_VD] / vh < -2.0 - 0.1) and (-y[Y_VD] + 2 * y[Y_V0] > 0)
+    if not ok or not (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) or windmill_unphysical:
+        return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
+                          model=model)
+    kernels.evaluate(y, a, dy, loads)
+    y_full = y.copy()
+    kernels.steady_wagner_states(y_full, model.arrays)
+    tw = _tip_twist(model, y_full)
+    return TrimResult("trimmed", y_full, omega, y[Y_VD], 0.0, 0.0, y[Y_V0], loads[L_THRUST], loads[L_TORQUE],
+                      0.0, tw, model=model)
+
+
+def omega_guess(model: CompiledModel) -> float:
+    """A tip speed of 150 m/s: only a scale for sanity checks and first guesses."""
+    return 150.0 / model.rotor.radius_m
+
+
+def _tip_twist(model: CompiledModel, y: np.ndarray) -> float:
+    x = y[model.x_slice()]
+    q0 = x[1:1 + model.n_q]
+    return float(model.arrays.tip[1] @ q0)
+
+
+# --------------------------------------------------------------------------- forward flight
+def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
+    """March ``n_revs`` revolutions (rotor speed/descent held per the model flags) and return the
+    state and the averages of thrust, torque, vertical and horizontal force over the last one,
+    and the teeter history of the last revolution."""
+    omega = max(y[Y_OMEGA], 1.0)
+    steps_rev = max(int(round(2 * math.pi / omega / dt)), 16)
+    dt_rev = 2 * math.pi / omega / steps_rev
+    n = n_revs * steps_rev
+    hist = np.zeros((steps_rev, kernels.N_HIST)); states = np.zeros((steps_rev, len(y)))
+    if n_revs > 1:
+        dummy_h = np.zeros((1, kernels.N_HIST)); dummy_s = np.zeros((1, len(y)))
+        kernels.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
+    done, rows, status = kernels.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
+    if status != 0:
+        raise FloatingPointError("non-finite state while converging the periodic solution")
+    from .model import L_FVERT as _  # noqa: F401  (layout documented in model)
+    avg = hist[:rows].mean(axis=0)
+    return y, avg, hist[:rows]
+
+
+def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional[float] = None,
+                 guess: Optional[TrimResult] = None) -> TrimResult:
+    """Periodic trim in forward flight at horizontal airspeed ``airspeed_m_s``."""
+    H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
+    weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
+    base = trim_axial(model) if guess is None else guess
+    if not base.ok:
+        return base
+    y = base.state.copy()
+    omega = omega_hold or base.omega_rad_s
+    vd = 0.0 if omega_hold else (base.descent_rate_m_s if guess is not None else base.descent_rate_m_s * 0.5)
+    tilt = base.disk_tilt_rad if guess is not None else math.radians(8.0)
+    y[Y_OMEGA] = omega
+    y[Y_VD] = vd
+    dt = stable_time_step(model, omega)
+    free = ["tilt"] if omega_hold else ["omega", "vd", "tilt"]
+
+    def evaluate(z, n_revs):
+        nonlocal y
+        vals = dict(omega=omega, vd=vd, tilt=tilt)
+        vals.update(dict(zip(free, z)))
+        m = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=airspeed_m_s, hold_omega=True, hold_vd=True)
+        y[Y_OMEGA] = vals["omega"]; y[Y_VD] = vals["vd"]
+        y, avg, last = _march_revs(m, y, n_revs, dt)
+        res = [avg[H["vertical_force_n"]] / weight - 1.0]
+        if not omega_hold:
+            res = [avg[H["torque_nm"]] / (0.05 * weight * model.rotor.radius_m)] + res + [avg[H["horizontal_force_n"]] / weight]
+        return np.array(res), avg, last, m
+
+    z = np.array([dict(omega=omega, vd=vd, tilt=tilt)[k] for k in free])
+    res, avg, last, m = evaluate(z, 12)
+    steps = np.array([dict(omega=0.2, vd=0.1, tilt=math.radians(0.2))[k] for k in free])
+    for it in range(30):
+        if np.max(np.abs(res)) < 2e-4:
+            break
+        J = np.zeros((len(z), len(z)))
+        y_keep = y.copy()
+        for k in range(len(z)):
+            zp = z.copy(); zp[k] += steps[k]
+            y = y_keep.copy()
+            rp, _, _, _ = evaluate(zp, 3)
+            J[:, k] = (rp - res) / steps[k]
+        y = y_keep
+        try:
+            dz = -np.linalg.solve(J, res)
+        except np.linalg.LinAlgError:
+            break
+        lim = np.array([dict(omega=5.0, vd=2.0, tilt=math.radians(2.0))[k] for k in free])
+        dz = np.clip(dz, -lim, lim)
+        z = z + dz
+        res, avg, last, m = evaluate(z, 4)
+    vals = dict(omega=omega, vd=vd, tilt=tilt); vals.update(dict(zip(free, z)))
+    ok = np.max(np.abs(res)) < 1e-3 and 0.2 * omega_guess(model) < vals["omega"] < 4 * omega_guess(model)
+    if not ok:
+        return TrimResult("no-autorotation", reason=f"forward-flight trim did not converge (residuals {np.round(res, 4).tolist()})",
+                          model=model)
+    beta = last[:, H["teeter_rad"]]
+    psi = last[:, H["azimuth_rad"]]
+    a1 = 2 * np.mean(beta * np.cos(psi)); b1 = 2 * np.mean(beta * np.sin(psi))
+    final = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=airspeed_m_s,
+                                hold_omega=omega_hold is not None, hold_vd=omega_hold is not None)
+    return TrimResult("trimmed", y.copy(), vals["omega"], vals["vd"], vals["tilt"], airspeed_m_s,
+                      float(y[Y_V0]), float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]),
+                      float(math.hypot(a1, b1)), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final)
+
+
+def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:
+    fl = model.flight
+    if fl.is_axial:
+        res = trim_axial(model, guess=None if guess is None else guess.state, omega_hold=hold)
+        if res.ok and hold is not None:
+            res.model = model.with_controls(hold_omega=True)
+        return res
+    if fl.mu is None:
+        return trim_forward(model, fl.airspeed_m_s, hold, guess)
+    # advance ratio given: fixed point on the airspeed V = mu Omega R / cos(tilt)
+    res = guess if guess is not None else trim_axial(model, omega_hold=hold)
+    if not res.ok:
+        return res
+    omega = res.omega_rad_s
+    tilt = res.disk_tilt_rad if guess is not None else math.radians(8.0)
+    g = guess
+    for _ in range(10):
+        v = fl.mu * omega * model.rotor.radius_m / math.cos(tilt)
+        res = trim_forward(model, v, hold, g)
+        if not res.ok or abs(res.mu - fl.mu) < 1e-4:
+            return res
+        omega, tilt, g = res.omega_rad_s, res.disk_tilt_rad, res
+    return res
+
+
+def _plausible(res: TrimResult, prev: Optional[TrimResult]) -> bool:
+    """Reject solutions off the physical branch: tip Mach above 0.9, or a jump in rotor speed."""
+    if not res.ok:
+        return False
+    m = res.model
+    if res.omega_rad_s * m.rotor.radius_m / m.flight.speed_of_sound_m_s > 0.9:
+        return False
+    if prev is not None and abs(res.omega_rad_s - prev.omega_rad_s) > 0.25 * prev.omega_rad_s:
+        return False
+    return True
+
+
+def _with_gj_scale(model: CompiledModel, factor: float) -> CompiledModel:
+    from dataclasses import replace
+    rotor = model.rotor
+    gj = tuple(np.asarray(rotor.stations.gj_nm2) * factor)
+    r_f = replace(rotor, stations=replace(rotor.stations, gj_nm2=gj))
+    return compile_model(r_f, model.flight, model.settings)
+
+
+def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int = 8,
+         stiff_factor: float = 30.0) -> TrimResult:
+    """Trim for the model's flight condition, following the trim branch by continuation in GJ
+    from a ``stiff_factor`` times stiffer blade down to the model's GJ (so the solution is the
+    physical branch, not a spurious root). If the branch ends first (a fold: the torque balance
+    has no solution), the result is ``no-autorotation`` with ``branch_end`` (GJ scale, mean GJ,
+    rotor speed, descent rate and tip twist of the last trimmed point) and that point's state
+    and model in ``state``/``model``, from which a simulation can start (model-notes §7)."""
+    hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
+    prev = None
+    last_f = None
+    for f in list(np.geomspace(stiff_factor, 1.0, n_steps)):
+        m_f = model if f == 1.0 else _with_gj_scale(model, f)
+        try:
+            res = _solve_at(m_f, hold, prev)
+        except FloatingPointError as exc:
+            res = TrimResult("no-autorotation", reason=str(exc), model=m_f)
+        if not _plausible(res, prev):
+            if prev is None:
+                res.status = "no-autorotation"
+                res.reason = res.reason or "no steady autorotation even for a 30x stiffer blade"
+                return res
+            # bisect the factor between the last good point and this one to locate the fold
+            lo, hi = last_f, f
+            for _ in range(4):
+                mid = math.sqrt(lo * hi)
+                try:
+                    r_mid = _solve_at(_with_gj_scale(model, mid), hold, prev)
+                except FloatingPointError:
+                    r_mid = TrimResult("no-autorotation")
+                if _plausible(r_mid, prev):
+                    prev, lo = r_mid, mid
+                else:
+                    hi = mid
+            gj_mean = float(np.mean(model.rotor.stations.gj_nm2))
+            out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
+            out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
+                          "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
+            out.branch_end = {"gj_scale": float(lo), "gj_mean_nm2": gj_mean * float(lo),
+                              "omega_rad_s": float(prev.omega_rad_s),
+                              "descent_rate_m_s": float(prev.descent_rate_m_s),
+                              "disk_tilt_rad": float(prev.disk_tilt_rad),
+                              "tip_twist_rad": float(prev.tip_twist_rad)}
+            out.start = prev
+            return out
+        prev, last_f = res, f
+    return prev
