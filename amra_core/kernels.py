@@ -60,6 +60,77 @@ def mass_flow(thrust, vx, vc, v0, rho, area):
 
 
 @kernel
+def wagner(wn, v, c, x1, x2):
+    """R.T. Jones two-state Wagner lag of the velocity ``wn`` normal to the chord [m/s].
+    Returns (effective normal velocity, dx1/dt, dx2/dt); ``x1, x2`` are the lag states [m/s],
+    ``v`` the section speed [m/s], ``c`` the chord [m]. Steady state: x_k = A_k wn."""
+    rate = 2.0 * v / c
+    return ((1.0 - A1 - A2) * wn + x1 + x2,
+            rate * B1 * (A1 * wn - x1),
+            rate * B2 * (A2 * wn - x2))
+
+
+@kernel
+def station_aero(ut, up, theta, thd, c, xea, xac, a, x1, x2, theo, rho, a_sound,
+                 af0, daf, cl_t, cd_t, cm_t):
+    """Loads per unit span at one blade station.
+
+    ``ut``: in-plane speed towards the leading edge; ``up``: flow up through the disc relative
+    to the blade [m/s]; ``theta``: total pitch, ``thd``: elastic pitch rate [rad, rad/s];
+    ``c`` chord [m]; ``xea``, ``xac`` chord fractions; ``a`` EA position in semichords aft of
+    mid-chord. Returns (force normal to the disc, up [N/m]; in-plane force in the direction of
+    rotation [N/m]; pitching moment about the EA, nose up [N m/m]; dx1/dt; dx2/dt)."""
+    v = math.sqrt(ut * ut + up * up) + 1e-9
+    aqs = theta + math.atan2(up + thd * (0.75 - xea) * c, ut)  # 3/4-chord angle
+    if theo:
+        wn = v * math.sin(aqs); uc = v * math.cos(aqs)
+        weff, d1, d2 = wagner(wn, v, c, x1, x2)
+        aeff = math.atan2(weff, uc)
+    else:
+        aeff = aqs; d1 = 0.0; d2 = 0.0
+    cl, cd, cm = airfoil_coefficients(aeff, v / a_sound, af0, daf, cl_t, cd_t, cm_t)
+    qdyn = 0.5 * rho * v * v
+    lift = qdyn * c * cl; drag = qdyn * c * cd
+    hb = 0.5 * c
+    fup = (lift * ut + drag * up) / v + math.pi * rho * hb * hb * v * thd
+    ffwd = (lift * up - drag * ut) / v
+    cn = cl * math.cos(aeff) + cd * math.sin(aeff)
+    mea = qdyn * c * c * (cm + (xea - xac) * cn) - math.pi * rho * hb * hb * hb * v * (0.5 - a) * thd
+    return fup, ffwd, mea, d1, d2
+
+
+@kernel
+def station_kinematics(y, m, b, j, vx, vup):
+    """Blade ``b``, station ``j``: (U_T, U_P, total pitch, elastic pitch rate, flap slope,
+    flap displacement, elastic twist) from the state ``y`` (see :mod:`amra_core.model`)."""
+    p = m.p
+    nq = int(p[P_NQ]); ns = int(p[P_NS])
+    x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns
+    sgn = 1.0 - 2.0 * b
+    psib = y[Y_PSI] + b * math.pi
+    r = m.st[j, S_R]
+    qoff = x0 + 1 + b * nq
+    qdoff = xd0 + 1 + b * nq
+    w = sgn * y[x0] * r; wdot = sgn * y[xd0] * r; wp = sgn * y[x0]; th = 0.0; thd = 0.0
+    for k in range(nq):
+        w += m.phw[j, k] * y[qoff + k]
+        wdot += m.phw[j, k] * y[qdoff + k]
+        wp += m.dphw[j, k] * y[qoff + k]
+        th += m.pht[j, k] * y[qoff + k]
+        thd += m.pht[j, k] * y[qdoff + k]
+    ut = y[Y_OMEGA] * r + vx * math.sin(psib) + (r - p[P_R0]) * y[Y_ZETAD0 + b]
+    up = vup - y[Y_V0] - wdot - vx * math.cos(psib) * wp
+    return ut, up, m.st[j, S_THETA0] + th, thd, wp, w, th
+
+
+@kernel
+def free_stream(y, m):
+    """(in-plane, up-through-disc) free-stream components [m/s] for the shaft tilt and airspeed."""
+    ca = math.cos(m.p[P_ALPHA_S]); sa = math.sin(m.p[P_ALPHA_S])
+    return m.p[P_VH] * ca - y[Y_VD] * sa, y[Y_VD] * ca + m.p[P_VH] * sa
+
+
+@kernel
 def rhs(y, dy, m, loads, work):
     """dy = f(y). ``m`` is a ModelArrays; ``loads`` receives thrust, torque etc.; ``work`` >= 2 n_s."""
     p = m.p
@@ -86,40 +157,14 @@ def rhs(y, dy, m, loads, work):
         qoff = 1 + b * nq
         for j in range(nst):
             r = m.st[j, S_R]; c = m.st[j, S_C]; xea = m.st[j, S_XEA]
-            wdot = sgn * betad * r; wp = sgn * beta; th = 0.0; thd = 0.0
-            for k in range(nq):
-                qk = y[x0 + qoff + k]; qdk = y[xd0 + qoff + k]
-                wdot += m.phw[j, k] * qdk
-                wp += m.dphw[j, k] * qk
-                th += m.pht[j, k] * qk
-                thd += m.pht[j, k] * qdk
-            ut = om * r + vx * sp + (r - r0) * zd
-            up = vup - v0 - wdot - vx * cp * wp
-            theta = m.st[j, S_THETA0] + th
-            v = math.sqrt(ut * ut + up * up) + 1e-9
-            aqs = theta + math.atan2(up + thd * (0.75 - xea) * c, ut)
+            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
             ia = a0 + 2 * (b * nst + j)
-            if theo:
-                wn = v * math.sin(aqs); uc = v * math.cos(aqs)
-                x1 = y[ia]; x2 = y[ia + 1]
-                aeff = math.atan2((1.0 - A1 - A2) * wn + x1 + x2, uc)
-                rate = 2.0 * v / c
-                dy[ia] = rate * B1 * (A1 * wn - x1)
-                dy[ia + 1] = rate * B2 * (A2 * wn - x2)
-            else:
-                aeff = aqs
-                dy[ia] = 0.0
-                dy[ia + 1] = 0.0
-            cl, cd, cm = airfoil_coefficients(aeff, v / a_sound, m.af_alpha0, m.af_dalpha,
-                                              m.af_cl, m.af_cd, m.af_cm)
-            qdyn = 0.5 * rho * v * v
-            lift = qdyn * c * cl; drag = qdyn * c * cd
-            hb = 0.5 * c
-            fup = (lift * ut + drag * up) / v + math.pi * rho * hb * hb * v * thd
-            ffwd = (lift * up - drag * ut) / v
-            cn = cl * math.cos(aeff) + cd * math.sin(aeff)
-            mea = qdyn * c * c * (cm + (xea - m.st[j, S_XAC]) * cn) \
-                - math.pi * rho * hb * hb * hb * v * (0.5 - m.st[j, S_A]) * thd
+            fup, ffwd, mea, d1, d2 = station_aero(ut, up, theta, thd, c, xea,
+                                                  m.st[j, S_XAC], m.st[j, S_A], y[ia], y[ia + 1],
+                                                  theo, rho, a_sound, m.af_alpha0, m.af_dalpha,
+                                                  m.af_cl, m.af_cd, m.af_cm)
+            dy[ia] = d1
+            dy[ia + 1] = d2
             wgt = m.st[j, S_W]
             fz = fup * wgt; my = mea * wgt
             work[0] += sgn * r * fz
@@ -174,32 +219,43 @@ def rhs(y, dy, m, loads, work):
 @kernel
 def steady_wagner_states(y, m):
     """Set the Wagner lag states to their steady values A_k * w_n for the current state."""
-    p = m.p
-    nq = int(p[P_NQ]); nst = int(p[P_NST]); ns = int(p[P_NS])
-    x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns; a0 = N_Y_FIXED + 2 * ns
-    ca = math.cos(p[P_ALPHA_S]); sa = math.sin(p[P_ALPHA_S])
-    vup = y[Y_VD] * ca + p[P_VH] * sa
-    vx = p[P_VH] * ca - y[Y_VD] * sa
+    nst = int(m.p[P_NST]); ns = int(m.p[P_NS])
+    a0 = N_Y_FIXED + 2 * ns
+    vx, vup = free_stream(y, m)
     for b in range(2):
-        sgn = 1.0 - 2.0 * b
-        psib = y[Y_PSI] + b * math.pi
-        qoff = 1 + b * nq
         for j in range(nst):
-            r = m.st[j, S_R]; c = m.st[j, S_C]
-            wdot = sgn * y[xd0] * r; wp = sgn * y[x0]; th = 0.0; thd = 0.0
-            for k in range(nq):
-                wdot += m.phw[j, k] * y[xd0 + qoff + k]
-                wp += m.dphw[j, k] * y[x0 + qoff + k]
-                th += m.pht[j, k] * y[x0 + qoff + k]
-                thd += m.pht[j, k] * y[xd0 + qoff + k]
-            ut = y[Y_OMEGA] * r + vx * math.sin(psib) + (r - p[P_R0]) * y[Y_ZETAD0 + b]
-            up = vup - y[Y_V0] - wdot - vx * math.cos(psib) * wp
+            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
+            c = m.st[j, S_C]
             v = math.sqrt(ut * ut + up * up) + 1e-9
-            aqs = m.st[j, S_THETA0] + th + math.atan2(up + thd * (0.75 - m.st[j, S_XEA]) * c, ut)
-            wn = v * math.sin(aqs)
+            wn = v * math.sin(theta + math.atan2(up + thd * (0.75 - m.st[j, S_XEA]) * c, ut))
             ia = a0 + 2 * (b * nst + j)
             y[ia] = A1 * wn
             y[ia + 1] = A2 * wn
+
+
+@kernel
+def station_loads(y, m, out):
+    """Spanwise distributions for both blades into ``out`` (2, n_st, 5): normal force [N/m],
+    torque per length about the shaft [N m/m], pitching moment about the EA [N m/m],
+    elastic twist [rad] and flap displacement [m]."""
+    p = m.p
+    nst = int(p[P_NST]); ns = int(p[P_NS])
+    a0 = N_Y_FIXED + 2 * ns
+    theo = p[P_AERO] > 0.5 and p[P_QUASI_STATIC] < 0.5
+    vx, vup = free_stream(y, m)
+    for b in range(2):
+        for j in range(nst):
+            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
+            ia = a0 + 2 * (b * nst + j)
+            fup, ffwd, mea, d1, d2 = station_aero(ut, up, theta, thd, m.st[j, S_C], m.st[j, S_XEA],
+                                                  m.st[j, S_XAC], m.st[j, S_A], y[ia], y[ia + 1], theo,
+                                                  p[P_RHO], p[P_A_SOUND], m.af_alpha0, m.af_dalpha,
+                                                  m.af_cl, m.af_cd, m.af_cm)
+            out[b, j, 0] = fup
+            out[b, j, 1] = ffwd * m.st[j, S_R]
+            out[b, j, 2] = mea
+            out[b, j, 3] = th
+            out[b, j, 4] = w
 
 
 @kernel

@@ -1,0 +1,1 @@
+"""AMRA's Panel dashboard (served with ``panel serve app/main.py``)."""
