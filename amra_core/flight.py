@@ -62,7 +62,9 @@ class SolverSettings:
     ``fidelity``: ``rigid`` | ``fem-torsion`` | ``fem-coupled``; ``aero``: ``theodorsen`` (Wagner,
     two states per station; default) | ``quasi-steady`` (3/4-chord angle and pitch-rate terms);
     ``n_elements``: FEM elements per blade; ``n_stations``: aerodynamic (Gauss) stations per blade;
-    ``dt_s``: time step [s] (``None``: chosen from the stiffest mode, see :mod:`amra_core.model`).
+    ``dt_s``: time step [s] (``None``: chosen from the stiffest mode, see :mod:`amra_core.model`);
+    ``max_mode_hz``: FEM levels keep the structural modes below this frequency [Hz] at the
+    reference rotor speed (Ritz reduction; ``None`` keeps every FEM coordinate).
     """
 
     fidelity: str = "rigid"
@@ -71,6 +73,7 @@ class SolverSettings:
     n_elements: int = 10
     n_stations: int = 12
     dt_s: Optional[float] = None
+    max_mode_hz: Optional[float] = 200.0
 
     def __post_init__(self):
         if self.fidelity not in FIDELITIES:
@@ -85,3 +88,5 @@ class SolverSettings:
             raise SettingsError(f"stations = {self.n_stations!r} is not allowed: must be an integer in [4, 60]")
         if self.dt_s is not None:
             _num("dt_s", self.dt_s, 1e-6, 0.01)
+        if self.max_mode_hz is not None:
+            _num("max_mode_hz", self.max_mode_hz, 50.0, 1e5)

@@ -8,4 +8,4 @@ Kernels take only float64/int64 arrays and scalars: no Python objects.
 from numba import njit
 
 #: Decorator for every jitted kernel in ``amra_core``.
-kernel = njit(cache=True, nogil=True, fastmath=False)
+kernel = njit(cache=True, nogil=True)

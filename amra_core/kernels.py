@@ -81,20 +81,26 @@ def station_aero(ut, up, theta, thd, c, xea, xac, a, x1, x2, theo, rho, a_sound,
     mid-chord. Returns (force normal to the disc, up [N/m]; in-plane force in the direction of
     rotation [N/m]; pitching moment about the EA, nose up [N m/m]; dx1/dt; dx2/dt)."""
     v = math.sqrt(ut * ut + up * up) + 1e-9
-    aqs = theta + math.atan2(up + thd * (0.75 - xea) * c, ut)  # 3/4-chord angle
+    up34 = up + thd * (0.75 - xea) * c  # flow at the 3/4 chord (pitch-rate term)
+    st_ = math.sin(theta); ct_ = math.cos(theta)
+    # velocity normal to and along the chord (angle theta + atan2(up34, ut)), scaled to speed v
+    v34 = math.sqrt(ut * ut + up34 * up34) + 1e-9
+    wn = v * (st_ * ut + ct_ * up34) / v34
+    uc = v * (ct_ * ut - st_ * up34) / v34
     if theo:
-        wn = v * math.sin(aqs); uc = v * math.cos(aqs)
-        weff, d1, d2 = wagner(wn, v, c, x1, x2)
-        aeff = math.atan2(weff, uc)
+        wn, d1, d2 = wagner(wn, v, c, x1, x2)
     else:
-        aeff = aqs; d1 = 0.0; d2 = 0.0
+        d1 = 0.0; d2 = 0.0
+    aeff = math.atan2(wn, uc)
+    inv = 1.0 / (math.sqrt(wn * wn + uc * uc) + 1e-12)
+    cos_a = uc * inv; sin_a = wn * inv
     cl, cd, cm = airfoil_coefficients(aeff, v / a_sound, af0, daf, cl_t, cd_t, cm_t)
     qdyn = 0.5 * rho * v * v
     lift = qdyn * c * cl; drag = qdyn * c * cd
     hb = 0.5 * c
     fup = (lift * ut + drag * up) / v + math.pi * rho * hb * hb * v * thd
     ffwd = (lift * up - drag * ut) / v
-    cn = cl * math.cos(aeff) + cd * math.sin(aeff)
+    cn = cl * cos_a + cd * sin_a
     mea = qdyn * c * c * (cm + (xea - xac) * cn) - math.pi * rho * hb * hb * hb * v * (0.5 - a) * thd
     return fup, ffwd, mea, d1, d2
 
@@ -104,20 +110,18 @@ def station_kinematics(y, m, b, j, vx, vup):
     """Blade ``b``, station ``j``: (U_T, U_P, total pitch, elastic pitch rate, flap slope,
     flap displacement, elastic twist) from the state ``y`` (see :mod:`amra_core.model`)."""
     p = m.p
-    nq = int(p[P_NQ]); ns = int(p[P_NS])
+    ns = int(p[P_NS])
     x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns
-    sgn = 1.0 - 2.0 * b
     psib = y[Y_PSI] + b * math.pi
     r = m.st[j, S_R]
-    qoff = x0 + 1 + b * nq
-    qdoff = xd0 + 1 + b * nq
-    w = sgn * y[x0] * r; wdot = sgn * y[xd0] * r; wp = sgn * y[x0]; th = 0.0; thd = 0.0
-    for k in range(nq):
-        w += m.phw[j, k] * y[qoff + k]
-        wdot += m.phw[j, k] * y[qdoff + k]
-        wp += m.dphw[j, k] * y[qoff + k]
-        th += m.pht[j, k] * y[qoff + k]
-        thd += m.pht[j, k] * y[qdoff + k]
+    w = 0.0; wdot = 0.0; wp = 0.0; th = 0.0; thd = 0.0
+    for k in range(ns):
+        q = y[x0 + k]; qd = y[xd0 + k]
+        w += m.shw[b, j, k] * q
+        wdot += m.shw[b, j, k] * qd
+        wp += m.shd[b, j, k] * q
+        th += m.sht[b, j, k] * q
+        thd += m.sht[b, j, k] * qd
     ut = y[Y_OMEGA] * r + vx * math.sin(psib) + (r - p[P_R0]) * y[Y_ZETAD0 + b]
     up = vup - y[Y_V0] - wdot - vx * math.cos(psib) * wp
     return ut, up, m.st[j, S_THETA0] + th, thd, wp, w, th
@@ -134,27 +138,21 @@ def free_stream(y, m):
 def rhs(y, dy, m, loads, work):
     """dy = f(y). ``m`` is a ModelArrays; ``loads`` receives thrust, torque etc.; ``work`` >= 2 n_s."""
     p = m.p
-    nq = int(p[P_NQ]); nst = int(p[P_NST]); ns = int(p[P_NS])
+    nst = int(p[P_NST]); ns = int(p[P_NS])
     rho = p[P_RHO]; R = p[P_R]; r0 = p[P_R0]
     theo = p[P_AERO] > 0.5 and p[P_QUASI_STATIC] < 0.5
-    om = y[Y_OMEGA]; vd = y[Y_VD]; v0 = y[Y_V0]; psi = y[Y_PSI]
+    om = y[Y_OMEGA]; psi = y[Y_PSI]
     x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns; a0 = N_Y_FIXED + 2 * ns
-    beta = y[x0]; betad = y[xd0]
     ca = math.cos(p[P_ALPHA_S]); sa = math.sin(p[P_ALPHA_S])
-    vh_air = p[P_VH]
-    vup = vd * ca + vh_air * sa  # free stream up through the disc
-    vx = vh_air * ca - vd * sa  # free stream in the disc plane, towards psi = 0 (tail)
+    vx, vup = free_stream(y, m)  # in-plane (towards psi = 0, the tail) and up through the disc
     for i in range(ns):
         work[i] = 0.0
     thrust = 0.0; torque = 0.0; hforce = 0.0
     lagm0 = 0.0; lagm1 = 0.0
     a_sound = p[P_A_SOUND]
     for b in range(2):
-        sgn = 1.0 - 2.0 * b
         psib = psi + b * math.pi
         sp = math.sin(psib); cp = math.cos(psib)
-        zd = y[Y_ZETAD0 + b]
-        qoff = 1 + b * nq
         for j in range(nst):
             r = m.st[j, S_R]; c = m.st[j, S_C]; xea = m.st[j, S_XEA]
             ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
@@ -167,9 +165,8 @@ def rhs(y, dy, m, loads, work):
             dy[ia + 1] = d2
             wgt = m.st[j, S_W]
             fz = fup * wgt; my = mea * wgt
-            work[0] += sgn * r * fz
-            for k in range(nq):
-                work[qoff + k] += m.phw[j, k] * fz + m.pht[j, k] * my
+            for k in range(ns):
+                work[k] += m.shw[b, j, k] * fz + m.sht[b, j, k] * my
             thrust += fz
             torque += r * ffwd * wgt
             if b == 0:
@@ -210,8 +207,8 @@ def rhs(y, dy, m, loads, work):
     fhoriz = thrust * sa + hforce * ca
     dy[Y_VD] = 0.0 if p[P_HOLD_VD] > 0.5 else p[P_G] - fvert / p[P_MASS]
     area = math.pi * R * R
-    vm = mass_flow(thrust, vx, -vup, v0, rho, area)
-    dy[Y_V0] = (thrust - 2.0 * rho * area * vm * v0) * 3.0 / (8.0 * rho * R * R * R)
+    vm = mass_flow(thrust, vx, -vup, y[Y_V0], rho, area)
+    dy[Y_V0] = (thrust - 2.0 * rho * area * vm * y[Y_V0]) * 3.0 / (8.0 * rho * R * R * R)
     loads[L_THRUST] = thrust; loads[L_TORQUE] = torque; loads[L_HFORCE] = hforce
     loads[L_FVERT] = fvert; loads[L_FHORIZ] = fhoriz; loads[L_VM] = vm
 
@@ -227,7 +224,8 @@ def steady_wagner_states(y, m):
             ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
             c = m.st[j, S_C]
             v = math.sqrt(ut * ut + up * up) + 1e-9
-            wn = v * math.sin(theta + math.atan2(up + thd * (0.75 - m.st[j, S_XEA]) * c, ut))
+            up34 = up + thd * (0.75 - m.st[j, S_XEA]) * c
+            wn = v * (math.sin(theta) * ut + math.cos(theta) * up34) / (math.sqrt(ut * ut + up34 * up34) + 1e-9)
             ia = a0 + 2 * (b * nst + j)
             y[ia] = A1 * wn
             y[ia + 1] = A2 * wn
@@ -260,21 +258,19 @@ def station_loads(y, m, out):
 
 @kernel
 def record_row(t, y, m, loads, row):
-    p = m.p
-    nq = int(p[P_NQ]); ns = int(p[P_NS])
+    """One history row (columns HISTORY_COLUMNS) for state ``y`` at time ``t``."""
+    ns = int(m.p[P_NS])
     x0 = N_Y_FIXED
-    row[0] = t; row[1] = y[Y_PSI]; row[2] = y[Y_OMEGA]; row[3] = y[x0]
-    R = p[P_R]
-    for b in range(2):
-        tw = 0.0; fl = (1.0 - 2.0 * b) * y[x0] * R
-        for k in range(nq):
-            fl += m.tip[0, k] * y[x0 + 1 + b * nq + k]
-            tw += m.tip[1, k] * y[x0 + 1 + b * nq + k]
-        row[4 + b] = tw
-        row[6 + b] = fl
+    row[0] = t; row[1] = y[Y_PSI]; row[2] = y[Y_OMEGA]
+    beta = 0.0; fl0 = 0.0; fl1 = 0.0; tw0 = 0.0; tw1 = 0.0
+    for k in range(ns):
+        q = y[x0 + k]
+        beta += m.teeter[k] * q
+        fl0 += m.tip[0, 0, k] * q; tw0 += m.tip[0, 1, k] * q
+        fl1 += m.tip[1, 0, k] * q; tw1 += m.tip[1, 1, k] * q
+    row[3] = beta; row[4] = tw0; row[5] = tw1; row[6] = fl0; row[7] = fl1
     row[8] = y[Y_VD]; row[9] = y[Y_V0]; row[10] = loads[L_THRUST]; row[11] = loads[L_TORQUE]
     row[12] = y[Y_ZETA0]; row[13] = y[Y_ZETA0 + 1]; row[14] = loads[L_FVERT]; row[15] = loads[L_FHORIZ]
-    ns = ns  # layout marker
 
 
 @kernel

@@ -23,7 +23,7 @@ from scipy.optimize import root
 
 from . import kernels
 from .model import (L_FHORIZ, L_FVERT, L_THRUST, L_TORQUE, N_Y_FIXED, CompiledModel, Y_OMEGA,
-                    Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step)
+                    Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step, transfer_state)
 
 MU_RANGE = (0.0, 0.5)
 
@@ -162,9 +162,7 @@ def omega_guess(model: CompiledModel) -> float:
 
 
 def _tip_twist(model: CompiledModel, y: np.ndarray) -> float:
-    x = y[model.x_slice()]
-    q0 = x[1:1 + model.n_q]
-    return float(model.arrays.tip[1] @ q0)
+    return float(model.arrays.tip[0, 1] @ y[model.x_slice()])
 
 
 # --------------------------------------------------------------------------- forward flight
@@ -256,6 +254,9 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
 
 def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:
     fl = model.flight
+    if guess is not None and guess.model is not model:
+        from dataclasses import replace as _replace
+        guess = _replace(guess, state=transfer_state(guess.state, guess.model, model), model=model)
     if fl.is_axial:
         res = trim_axial(model, guess=None if guess is None else guess.state, omega_hold=hold)
         if res.ok and hold is not None:
