@@ -21,6 +21,7 @@ from .flight import FlightCondition, SolverSettings
 from .model import Y_OMEGA, CompiledModel, compile_model, stable_time_step, transfer_state
 from .rotor import Rotor
 from .trim import TrimResult, trim
+from .verdict import Verdict, judge
 
 HISTORY_COLUMNS = kernels.HISTORY_COLUMNS
 COL = {c: i for i, c in enumerate(HISTORY_COLUMNS)}
@@ -85,6 +86,7 @@ class Simulation:
             raise RuntimeError(f"no trimmed state to start from: {tr.reason}")
         self.omega_ref = float(tr.state[Y_OMEGA])
         self.y = transfer_state(tr.state, tr.model, self.model)
+        self.reference_row = self._row(self.y)
         self._apply_perturbation(case.perturbation)
         self.t = 0.0
         self.dt = case.settings.dt_s or stable_time_step(self.model, 1.3 * self.omega_ref)
@@ -169,6 +171,18 @@ class Simulation:
         return {"r_m": self.model.arrays.st[:, 0].tolist(), "azimuth_rad": psi,
                 "torque_per_length_nm_m": np.array(torque).tolist(),
                 "twist_rad": np.array(twist).tolist(), "flap_m": np.array(flap).tolist()}
+
+    def verdict(self) -> Verdict:
+        """Verdict on the run so far (model-notes §5)."""
+        scale = max(abs(self.case.perturbation.teeter_rad), abs(self.case.perturbation.twist_rad), 1e-4)
+        return judge(self.history, HISTORY_COLUMNS, self.omega_ref, self.case.flight.is_axial, self.status,
+                     self.trim.ok, self.reference_row, scale)
+
+    def _row(self, y: np.ndarray) -> np.ndarray:
+        row = np.zeros(len(HISTORY_COLUMNS)); loads = np.zeros(8); dy = np.zeros_like(y)
+        kernels.evaluate(y, self.model.arrays, dy, loads)
+        kernels.record_row(0.0, y, self.model.arrays, loads, row)
+        return row
 
     def to_csv(self, path) -> None:
         np.savetxt(path, self.history, delimiter=",", header=",".join(HISTORY_COLUMNS), comments="")

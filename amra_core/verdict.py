@@ -1,0 +1,142 @@
+"""Verdicts on a simulated run (model-notes §5): growth rate, dominant frequency, collapse time.
+
+Deviation signals (normalised teeter, tip twists and rotor speed) are taken relative to the start
+(axial flight: the trim is constant) or to the same azimuth one revolution earlier (forward flight:
+the trim is periodic, so ``s(t) - s(t - T_rev)`` removes it and keeps any growing or decaying
+motion). Their envelope (the maximum per window of one revolution, or 0.2 s) is fitted by least
+squares in log scale: the slope is the growth rate [1/s].
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Optional
+
+import numpy as np
+
+VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure")
+UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
+
+#: a perturbation growing faster than this [1/s] is unstable (|e^(0.02 * 10 s)| = 1.22 over a run)
+GROWTH_THRESHOLD_PER_S = 0.02
+#: oscillation frequencies below this [Hz] count as monotonic (divergence), not flutter
+MIN_FLUTTER_HZ = 0.3
+
+
+@dataclass
+class Verdict:
+    verdict: str
+    growth_rate_per_s: Optional[float]
+    frequency_hz: Optional[float]
+    collapse_time_s: Optional[float]  #: time at which the rotor speed fell below 50 % of trim
+    amplitude: Optional[float] = None  #: final envelope of the normalised deviation [-]
+    explanation: str = ""
+
+    @property
+    def unstable(self) -> bool:
+        return self.verdict in UNSTABLE
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+SIGNALS = ("teeter_rad", "tip_twist_0_rad", "tip_twist_1_rad", "omega_rad_s")
+
+
+def _deviation(h: np.ndarray, cols: dict, axial: bool, omega_ref: float, ref_row, scale: float):
+    """Normalised deviation signals d (n, 4) and their norm e (n,)."""
+    t = h[:, cols["t_s"]]
+    sig = np.stack([h[:, cols[k]] for k in SIGNALS], axis=1)
+    sig[:, 3] = sig[:, 3] / omega_ref  # rotor speed as a fraction of trim
+    if axial:
+        ref = np.array([ref_row[cols[k]] for k in SIGNALS])
+        ref[3] = ref[3] / omega_ref
+        d = (sig - ref) / scale
+    else:
+        t_rev = 2 * math.pi / omega_ref
+        d = np.full_like(sig, np.nan)
+        late = t >= t[0] + t_rev
+        for k in range(sig.shape[1]):
+            d[late, k] = (sig[late, k] - np.interp(t[late] - t_rev, t, sig[:, k])) / scale
+    return np.sqrt(np.sum(d**2, axis=1)), d
+
+
+def _envelope_fit(t, e, window):
+    ok = np.isfinite(e)
+    t, e = t[ok], e[ok]
+    if len(t) < 4:
+        return None, None, None
+    edges = np.arange(t[0], t[-1] + window, window)
+    tc, ec = [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = (t >= a) & (t < b)
+        if sel.sum() >= 2 and e[sel].max() > 0:
+            tc.append(0.5 * (a + b)); ec.append(e[sel].max())
+    if len(tc) < 3:
+        return None, None, None
+    tc, ec = np.array(tc), np.log(np.array(ec))
+    n = len(tc)
+    use = slice(n // 3, n)  # fit after the fast initial transients
+    slope = np.polyfit(tc[use], ec[use], 1)[0]
+    return float(slope), float(np.exp(ec[-1])), float(np.exp(ec[0]))
+
+
+def _dominant_frequency(t, d):
+    ok = np.isfinite(d).all(axis=1)
+    t, d = t[ok], d[ok]
+    if len(t) < 16:
+        return None
+    k = int(np.argmax(np.nanstd(d, axis=0)))
+    x = d[:, k] - d[:, k].mean()
+    dt = np.median(np.diff(t))
+    spec = np.abs(np.fft.rfft(x * np.hanning(len(x))))
+    f = np.fft.rfftfreq(len(x), dt)
+    spec[0] = 0.0
+    return float(f[int(np.argmax(spec))])
+
+
+def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: str,
+          trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01) -> Verdict:
+    """Classify a run. ``status`` is the Simulation's (running/numerical-failure/rotor-stopped/
+    overspeed-stop); ``trimmed`` says whether a steady autorotation existed for the parameters;
+    ``ref_row`` is the history row of the unperturbed starting state."""
+    cols = {c: i for i, c in enumerate(columns)}
+    h = history
+    if status == "numerical-failure" or not np.isfinite(h).all():
+        return Verdict("numerical-failure", None, None, None, explanation="non-finite state: the run was stopped")
+    t = h[:, cols["t_s"]]
+    om = h[:, cols["omega_rad_s"]]
+    below = np.nonzero(om < 0.5 * omega_ref)[0]
+    collapse = float(t[below[0]]) if len(below) else None
+    e, d = _deviation(h, cols, axial, omega_ref, ref_row, perturbation_scale)
+    window = max(2 * math.pi / omega_ref, 0.1)
+    end = below[0] if len(below) else len(t)
+    growth, amp_end, amp_start = _envelope_fit(t[:end], e[:end], window)
+    freq = _dominant_frequency(t[:end], d[:end])
+    oscill = freq is not None and freq >= MIN_FLUTTER_HZ
+    if status == "overspeed-stop" or om[-1] > 1.5 * omega_ref:
+        return Verdict("overspeed", growth, freq, collapse, amp_end, "rotor speed ran away upwards")
+    if collapse is not None or status == "rotor-stopped":
+        if growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill:
+            why = "coupled oscillation grew, then the rotor speed collapsed"
+            return Verdict("flutter", growth, freq, collapse, amp_end, why)
+        if not trimmed:
+            return Verdict("no-autorotation", growth, freq, collapse, amp_end,
+                           "no torque equilibrium exists: the rotor speed decayed from the start")
+        return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
+    if not trimmed:
+        drift = (om[0] - om[-1]) / omega_ref
+        if growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill:
+            return Verdict("flutter", growth, freq, collapse, amp_end, "growing coupled oscillation (no trim exists)")
+        if drift > 0.05:
+            return Verdict("no-autorotation", growth, freq, collapse, amp_end,
+                           f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end")
+    if growth is None:
+        return Verdict("stable", None, freq, None, amp_end, "run too short to identify a growth rate")
+    if growth > GROWTH_THRESHOLD_PER_S or (amp_end is not None and amp_end > 20.0):
+        kind = "flutter" if oscill else "divergence"
+        why = "growing oscillation" if oscill else "monotonic runaway"
+        if growth <= GROWTH_THRESHOLD_PER_S:
+            why = "saturated into a limit cycle 20x larger than the perturbation"
+        return Verdict(kind, growth, freq, collapse, amp_end, why)
+    return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays")
