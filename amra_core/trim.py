@@ -64,8 +64,9 @@ class TrimResult:
                                              "teeter_amplitude_rad", "tip_twist_rad")}
         out["mu"] = self.mu
         out = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in out.items()}
-        if not self.ok:
+        if self.reason:
             out["reason"] = self.reason
+        if not self.ok:
             out["branch_end"] = self.branch_end
         return out
 
@@ -239,17 +240,16 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
         res, avg, last, m = evaluate(z, 4)
     vals = dict(omega=omega, vd=vd, tilt=tilt); vals.update(dict(zip(free, z)))
     ok = np.max(np.abs(res)) < 1e-3 and 0.2 * omega_guess(model) < vals["omega"] < 4 * omega_guess(model)
+    if not ok and omega_hold:
+        return _max_thrust_level(model, airspeed_m_s, omega_hold, base.state, dt)
     if not ok:
         return TrimResult("no-autorotation", reason=f"forward-flight trim did not converge (residuals {np.round(res, 4).tolist()})",
                           model=model)
-    beta = last[:, H["teeter_rad"]]
-    psi = last[:, H["azimuth_rad"]]
-    a1 = 2 * np.mean(beta * np.cos(psi)); b1 = 2 * np.mean(beta * np.sin(psi))
     final = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=airspeed_m_s,
                                 hold_omega=omega_hold is not None, hold_vd=omega_hold is not None)
     return TrimResult("trimmed", y.copy(), vals["omega"], vals["vd"], vals["tilt"], airspeed_m_s,
                       float(y[Y_V0]), float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]),
-                      float(math.hypot(a1, b1)), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final)
+                      _teeter_amplitude(last), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final)
 
 
 def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:
@@ -300,6 +300,35 @@ def _with_gj_scale(model: CompiledModel, factor: float) -> CompiledModel:
     return compile_model(r_f, model.flight, model.settings)
 
 
+def _teeter_amplitude(last: np.ndarray) -> float:
+    H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
+    beta, psi = last[:, H["teeter_rad"]], last[:, H["azimuth_rad"]]
+    return float(math.hypot(2 * np.mean(beta * np.cos(psi)), 2 * np.mean(beta * np.sin(psi))))
+
+
+def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y0: np.ndarray, dt: float) -> TrimResult:
+    """Level flight at a held rotor speed where lift cannot reach the weight: scan the shaft tilt
+    for the largest revolution-averaged vertical force and report it (status ``thrust-limited``)
+    with the teeter amplitude there (model-notes §6, G-UNIV Table 1)."""
+    H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
+    y = y0.copy(); y[Y_OMEGA] = omega; y[Y_VD] = 0.0
+    best = None
+    for tilt_deg in np.arange(-4.0, 50.01, 2.0):
+        m = model.with_controls(alpha_s_rad=math.radians(tilt_deg), airspeed_m_s=airspeed_m_s, hold_omega=True, hold_vd=True)
+        y, avg, last = _march_revs(m, y, 6, dt)
+        if best is None or avg[H["vertical_force_n"]] > best[1][H["vertical_force_n"]]:
+            best = (tilt_deg, avg, last, y.copy())
+    tilt_deg, avg, last, yb = best
+    weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
+    res = TrimResult("thrust-limited", yb, omega, 0.0, math.radians(tilt_deg), airspeed_m_s, float(yb[Y_V0]),
+                     float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]), _teeter_amplitude(last),
+                     float(np.mean(last[:, H["tip_twist_0_rad"]])), model=model)
+    res.reason = (f"with the rotor speed held at {omega:g} rad/s the largest vertical force in level flight is "
+                  f"{avg[H['vertical_force_n']]:.0f} N ({100 * avg[H['vertical_force_n']] / weight:.0f} % of the weight "
+                  f"{weight:.0f} N), at a shaft tilt of {tilt_deg:g} deg; reported there")
+    return res
+
+
 def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int = 8,
          stiff_factor: float = 30.0) -> TrimResult:
     """Trim for the model's flight condition, following the trim branch by continuation in GJ
@@ -317,6 +346,8 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
             res = _solve_at(m_f, hold, prev)
         except FloatingPointError as exc:
             res = TrimResult("no-autorotation", reason=str(exc), model=m_f)
+        if res.status == "thrust-limited":  # rotor speed held: the stiffness continuation does not apply
+            return res if f == 1.0 else _solve_at(model, hold, None)
         if not _plausible(res, prev):
             if prev is None:
                 res.status = "no-autorotation"
