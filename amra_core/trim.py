@@ -193,7 +193,7 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
     H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
     weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
     base = trim_axial(model) if guess is None else guess
-    if not base.ok:
+    if not base.ok and base.status != "retry":
         return base
     y = base.state.copy()
     omega = omega_hold or base.omega_rad_s
@@ -241,6 +241,10 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
     vals = dict(omega=omega, vd=vd, tilt=tilt); vals.update(dict(zip(free, z)))
     ok = np.max(np.abs(res)) < 1e-3 and 0.2 * omega_guess(model) < vals["omega"] < 4 * omega_guess(model)
     if not ok and omega_hold:
+        if guess is None or guess.status != "retry":
+            retry = TrimResult("retry", state=base.state, disk_tilt_rad=math.radians(20.0), omega_rad_s=omega_hold,
+                               model=model)
+            return trim_forward(model, airspeed_m_s, omega_hold, retry)
         return _max_thrust_level(model, airspeed_m_s, omega_hold, base.state, dt)
     if not ok:
         return TrimResult("no-autorotation", reason=f"forward-flight trim did not converge (residuals {np.round(res, 4).tolist()})",
@@ -315,7 +319,7 @@ def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y
     best = None
     for tilt_deg in np.arange(-4.0, 50.01, 2.0):
         m = model.with_controls(alpha_s_rad=math.radians(tilt_deg), airspeed_m_s=airspeed_m_s, hold_omega=True, hold_vd=True)
-        y, avg, last = _march_revs(m, y, 6, dt)
+        y, avg, last = _march_revs(m, y, 10, dt)
         if best is None or avg[H["vertical_force_n"]] > best[1][H["vertical_force_n"]]:
             best = (tilt_deg, avg, last, y.copy())
     tilt_deg, avg, last, yb = best
@@ -338,6 +342,8 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
     rotor speed, descent rate and tip twist of the last trimmed point) and that point's state
     and model in ``state``/``model``, from which a simulation can start (model-notes §7)."""
     hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
+    if hold is not None and not model.flight.is_axial:
+        return _solve_at(model, hold, None)  # rotor speed held (Table 1): no autorotation branch to follow
     prev = None
     last_f = None
     for f in list(np.geomspace(stiff_factor, 1.0, n_steps)):
