@@ -156,6 +156,24 @@ def cmd_simulate(args):
     return 0
 
 
+def cmd_stability(args):
+    from .model import compile_model
+    from .stability import analyse
+    settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, n_elements=args.elements)
+    res = analyse(compile_model(_load_rotor(args), _flight(args), settings))
+    out = res.to_dict(include_aero_lag=args.all_modes)
+    if not res.trim.ok:
+        out["reason"] = res.trim.reason
+    if args.json:
+        print(json.dumps(out, indent=2, default=_jsonable))
+    else:
+        print(f"stable: {out['stable']}  ({out['method']}; trim {res.trim.status})")
+        print(f"{'mode':14s} {'f [Hz]':>9s} {'zeta [-]':>9s} {'Re [1/s]':>10s}")
+        for m in out["modes"]:
+            print(f"{m['label']:14s} {m['frequency_hz']:9.3f} {m['damping_ratio']:9.4f} {m['real_part_per_s']:10.4f}")
+    return 0
+
+
 def cmd_bench(args):
     from .bench import run_bench
     rep = run_bench(sim_seconds=args.seconds)
@@ -204,6 +222,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("stability", help="eigenvalues (axial) or Floquet exponents (forward) about trim")
+    _rotor_args(p)
+    _flight_args(p)
+    p.add_argument("--aero", choices=("quasi-steady", "theodorsen"), default="theodorsen")
+    p.add_argument("--all-modes", action="store_true", help="also list the aerodynamic lag modes")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_stability)
 
     p = sub.add_parser("bench", help="simulated seconds per wall second for each fidelity")
     p.add_argument("--seconds", type=_number("--seconds", 0.5, 60.0), default=5.0)

@@ -241,6 +241,9 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     K = a.k0 + omega_rad_s**2 * a.k2
     w2 = np.linalg.eigvals(a.minv @ K).real
     w_max = float(np.sqrt(max(w2.max(), 1.0)))
+    st_ = model.structure  # collective lag against the free rotor: effective inertia I_z - 2 S^2 / I_R
+    i_eff = max(st_.I_lag - 2.0 * st_.S_lag**2 / st_.I_R, 1e-6 * st_.I_lag)
+    w_max = max(w_max, float(np.sqrt((st_.k_lag + omega_rad_s**2 * st_.k2_lag) / i_eff)))
     c_min = float(a.st[:, S_C].min())
     v_tip = omega_rad_s * model.rotor.radius_m + model.flight.airspeed_m_s + 30.0
     lam_aero = 2.0 * v_tip / c_min * WAGNER_B[1] if model.settings.aero == "theodorsen" else 0.0

@@ -59,14 +59,17 @@ class ModalSolution:
     """Eigen-solution of the held-speed rotor over the physical coordinates ``[x, zeta0, zeta1]``.
 
     ``eigenvalues`` [rad^2/s^2] ascending; ``vectors`` columns mass-normalised
-    (``vectors.T @ M @ vectors = I``); ``symmetry`` per mode ``'collective'`` or ``'cyclic'``;
-    ``kinds``/``blade_of`` per physical coordinate (lag coordinates are last)."""
+    (``vectors.T @ M @ vectors = I``); ``M`` the mass and ``K`` the stiffness at this speed,
+    ``K2`` the stiffness per Omega^2 (``K = K0 + Omega^2 K2``); ``symmetry`` per mode
+    ``'collective'`` or ``'cyclic'``; ``kinds``/``blade_of`` per physical coordinate (lag
+    coordinates are last)."""
 
     omega_rad_s: float
     eigenvalues: np.ndarray
     vectors: np.ndarray
     M: np.ndarray
     K: np.ndarray
+    K2: np.ndarray
     symmetry: tuple
     kinds: tuple
     blade_of: tuple
@@ -81,18 +84,21 @@ def _resolve_rotor(rotor) -> Rotor:
 
 
 def _full_matrices(s, omega_rad_s: float):
-    """Block-diagonal (M, K, kinds, blade_of) with the two lag coordinates appended."""
+    """Block-diagonal (M, K, K2, kinds, blade_of) with the two lag coordinates appended."""
     n = s.n
     M = np.zeros((n + 2, n + 2))
-    K = np.zeros((n + 2, n + 2))
+    K0 = np.zeros((n + 2, n + 2))
+    K2 = np.zeros((n + 2, n + 2))
     M[:n, :n] = s.M
-    K[:n, :n] = s.K0 + omega_rad_s**2 * s.K2
+    K0[:n, :n] = s.K0
+    K2[:n, :n] = s.K2
     for j in (n, n + 1):
         M[j, j] = s.I_lag
-        K[j, j] = s.k_lag + omega_rad_s**2 * s.k2_lag
+        K0[j, j] = s.k_lag
+        K2[j, j] = s.k2_lag
     kinds = tuple(s.kinds) + ("lag", "lag")
     blade_of = tuple(s.blade_of) + (0, 1)
-    return M, K, kinds, blade_of
+    return M, K0 + omega_rad_s**2 * K2, K2, kinds, blade_of
 
 
 def _symmetry_basis(kinds, blade_of):
@@ -140,7 +146,7 @@ def solve_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
         raise ValueError(f"omega_rad_s = {omega_rad_s!r} is not allowed: must be finite and >= 0")
     mesh = make_mesh(fidelity, rotor.root_cutout_m, rotor.radius_m, n_elements)
     s = assemble(rotor, mesh)
-    M, K, kinds, blade_of = _full_matrices(s, omega)
+    M, K, K2, kinds, blade_of = _full_matrices(s, omega)
     Tc, Ts = _symmetry_basis(kinds, blade_of)
     cross = max(np.abs(Tc.T @ M @ Ts).max(), np.abs(Tc.T @ K @ Ts).max())
     scale = max(np.abs(M).max(), np.abs(K).max())
@@ -160,7 +166,8 @@ def solve_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
         ps = np.sum((Ts.T @ vec) ** 2, axis=0)
         sym = np.where(pc >= ps, "collective", "cyclic")
     order = np.argsort(lam, kind="stable")
-    return ModalSolution(omega, lam[order], vec[:, order], M, K, tuple(sym[order]), kinds, blade_of, s)
+    return ModalSolution(omega, lam[order], vec[:, order], M, K, K2, tuple(sym[order]), kinds,
+                         blade_of, s)
 
 
 def _frequencies_hz(lam: np.ndarray) -> np.ndarray:
@@ -375,8 +382,19 @@ def fan_plot(rotor, omegas_rad_s, fidelity: str = "fem-coupled", n_elements: int
     Returns
     -------
     dict
-        ``omega_rad_s`` (ndarray [rad/s]) and ``modes``: list of ``{"label", "symmetry",
-        "frequency_hz": ndarray [Hz] over the speeds}``.
+        ``omega_rad_s`` (ndarray [rad/s]) and ``modes``: list of dicts, each with
+
+        ``label``, ``symmetry`` : str
+            Taken at the first speed.
+        ``frequency_hz`` : ndarray
+            Frequency [Hz] of the tracked mode at every speed.
+        ``southwell`` : ndarray
+            Southwell coefficient ``kappa = phi^T K2 phi`` (mass-normalised ``phi``,
+            dimensionless) at every speed: ``d(omega^2)/d(Omega^2) = kappa`` along the branch
+            (Hellmann-Feynman), so ``omega^2 ~ omega_0^2 + kappa Omega^2`` locally.
+        ``assurance`` : ndarray
+            ``|phi^T M phi_previous|`` of the match with the previous speed (1 at the first);
+            values well below 1 mean the speed step is too coarse to follow the mode.
     """
     rotor = _resolve_rotor(rotor)
     omegas = np.asarray(omegas_rad_s, dtype=float).ravel()
@@ -387,11 +405,19 @@ def fan_plot(rotor, omegas_rad_s, fidelity: str = "fem-coupled", n_elements: int
     labels = mode_labels(sols[0])
     freqs = np.array([_frequencies_hz(s.eigenvalues) for s in sols])  # (n_steps, n_all)
     n = min(int(n_modes), freqs.shape[1])
+    steps = np.arange(len(omegas))
     modes = []
     for i in range(n):
+        phis = [s.vectors[:, index[k, i]] for k, s in enumerate(sols)]
+        kappa = np.array([p @ s.K2 @ p for p, s in zip(phis, sols)])
+        mac = np.ones(len(omegas))
+        for k in range(1, len(omegas)):
+            mac[k] = abs(phis[k - 1] @ sols[0].M @ phis[k])
         modes.append({
             "label": labels[i],
             "symmetry": sols[0].symmetry[i],
-            "frequency_hz": freqs[np.arange(len(omegas)), index[:, i]],
+            "frequency_hz": freqs[steps, index[:, i]],
+            "southwell": kappa,
+            "assurance": mac,
         })
     return {"omega_rad_s": omegas, "modes": modes}

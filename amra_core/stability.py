@@ -1,0 +1,209 @@
+"""Linearised stability about the trimmed state, and the classification of one map cell.
+
+* Axial flight is time-invariant: the Jacobian ``A = df/dy`` of the full nonlinear model (central
+  differences of the jitted right-hand side) at the trim gives eigenvalues directly.
+* Forward flight is periodic: the monodromy matrix (the state transition over one revolution,
+  central differences of perturbed one-revolution marches of the full nonlinear model) gives
+  Floquet multipliers ``z``; exponents ``ln(z)/T``. The frequency of a Floquet exponent is only
+  defined modulo the rotor frequency; the principal value is reported.
+
+The azimuth ``psi`` is the time-like coordinate and is left out of the linearisation (in axial
+flight nothing depends on it; in forward flight it is the phase along the periodic orbit).
+Each mode is labelled by its participation: teeter, flap, torsion, lag, rotor speed, inflow,
+descent, or aero lag (the Wagner states).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+from typing import Optional
+
+import numpy as np
+
+from . import kernels
+from .flight import FlightCondition, SolverSettings
+from .model import (N_Y_FIXED, Y_OMEGA, Y_V0, Y_VD, Y_ZETA0, Y_ZETAD0, CompiledModel, compile_model,
+                    stable_time_step)
+from .rotor import Rotor
+from .trim import TrimResult, trim
+
+#: a mode with real part above this [1/s] is unstable (below: numerically neutral)
+UNSTABLE_REAL_PART = 1e-3
+#: modes decaying faster than this [1/s] are labelled 'aero lag' (Wagner states decay at 2 b_k V/c,
+#: 30-700 1/s; the aerodynamically damped structural modes seen here decay at under ~40 1/s)
+AERO_LAG_DECAY = 60.0
+MIN_FLUTTER_HZ = 0.3
+
+
+@dataclass
+class Mode:
+    label: str
+    frequency_hz: float
+    damping_ratio: float
+    real_part_per_s: float
+    participation: dict = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["participation"] = {k: round(v, 3) for k, v in self.participation.items()}
+        return d
+
+
+@dataclass
+class StabilityResult:
+    stable: bool
+    modes: list
+    trim: TrimResult
+    method: str  #: 'eigenvalues' (axial) or 'floquet' (forward)
+
+    @property
+    def critical(self) -> Optional[Mode]:
+        return max(self.modes, key=lambda m: m.real_part_per_s) if self.modes else None
+
+    def to_dict(self, include_aero_lag: bool = False) -> dict:
+        modes = [m.to_dict() for m in self.modes if include_aero_lag or m.label != "aero lag"]
+        return {"stable": self.stable, "method": self.method, "trim": self.trim.to_dict(), "modes": modes}
+
+
+def _participation(model: CompiledModel, v: np.ndarray, omega: float, real_mode: bool) -> dict:
+    """Share of each physical group in eigenvector ``v`` (state without psi), with rates scaled
+    by the rotor speed and speeds by the tip speed so angles, rates and speeds compare."""
+    y = np.concatenate([[0.0], v])
+    a = model.arrays
+    R = model.rotor.radius_m
+    xs, xds = model.x_slice(), model.xd_slice()
+    q, qd = y[xs], y[xds]
+    vt = omega * R
+    g = {
+        "rotor speed": abs(y[Y_OMEGA]) / omega,
+        "descent": abs(y[Y_VD]) / vt * 10.0,
+        "inflow": abs(y[Y_V0]) / vt * 10.0,
+        "lag": math.hypot(abs(y[Y_ZETA0]) + abs(y[Y_ZETA0 + 1]), (abs(y[Y_ZETAD0]) + abs(y[Y_ZETAD0 + 1])) / omega),
+        "teeter": math.hypot(abs(a.teeter @ q), abs(a.teeter @ qd) / omega),
+    }
+    fl = sum(math.hypot(abs(a.tip[b, 0] @ q - (1 - 2 * b) * R * (a.teeter @ q)),
+                        abs(a.tip[b, 0] @ qd - (1 - 2 * b) * R * (a.teeter @ qd)) / omega) for b in (0, 1)) / R
+    tw = sum(math.hypot(abs(a.tip[b, 1] @ q), abs(a.tip[b, 1] @ qd) / omega) for b in (0, 1))
+    g["flap"] = fl
+    g["torsion"] = tw
+    tot = sum(g.values())
+    aero = float(np.abs(y[model.aero_slice()]).sum()) / vt
+    if real_mode and tot < aero:  # a non-oscillatory mode dominated by the Wagner lag states
+        return {"aero lag": 1.0}
+    return {k: val / tot for k, val in g.items()}
+
+
+def _modes_from_exponents(model, lam, vecs, omega) -> list:
+    modes = []
+    for k in range(len(lam)):
+        if lam[k].imag < -1e-9:
+            continue  # report each complex pair once
+        part = _participation(model, vecs[:, k], omega, abs(lam[k].imag) < 1e-6)
+        label = "aero lag" if lam[k].real < -AERO_LAG_DECAY else max(part, key=part.get)
+        w = abs(lam[k])
+        modes.append(Mode(label, float(abs(lam[k].imag) / (2 * math.pi)),
+                          float(-lam[k].real / w) if w > 0 else 0.0, float(lam[k].real), part))
+    modes.sort(key=lambda m: (m.label == "aero lag", m.frequency_hz))
+    return modes
+
+
+def jacobian(model: CompiledModel, y0: np.ndarray) -> np.ndarray:
+    """df/dy without the azimuth row/column, by central differences."""
+    n = len(y0)
+    dy_p = np.zeros(n); dy_m = np.zeros(n); loads = np.zeros(8)
+    J = np.zeros((n - 1, n - 1))
+    for i in range(1, n):
+        h = 1e-6 * max(1.0, abs(y0[i]))
+        yp = y0.copy(); yp[i] += h
+        ym = y0.copy(); ym[i] -= h
+        kernels.evaluate(yp, model.arrays, dy_p, loads)
+        kernels.evaluate(ym, model.arrays, dy_m, loads)
+        J[:, i - 1] = (dy_p[1:] - dy_m[1:]) / (2 * h)
+    return J
+
+
+def monodromy(model: CompiledModel, y0: np.ndarray, dt: float):
+    """One-revolution state transition (without psi) by central differences; returns (Phi, T)."""
+    omega = y0[Y_OMEGA]
+    steps = max(int(round(2 * math.pi / omega / dt)), 32)
+    T = 2 * math.pi / omega
+    h_dt = T / steps
+    n = len(y0)
+    hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, n))
+    Phi = np.zeros((n - 1, n - 1))
+    for i in range(1, n):
+        h = 1e-6 * max(1.0, abs(y0[i]))
+        yp = y0.copy(); yp[i] += h
+        ym = y0.copy(); ym[i] -= h
+        kernels.advance(yp, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+        kernels.advance(ym, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+        Phi[:, i - 1] = (yp[1:] - ym[1:]) / (2 * h)
+    return Phi, T
+
+
+def analyse(model: CompiledModel, trim_result: Optional[TrimResult] = None) -> StabilityResult:
+    """Eigenvalues (axial) or Floquet exponents (forward) about the trim of ``model``."""
+    tr = trim_result if trim_result is not None else trim(model)
+    if not tr.ok:
+        return StabilityResult(False, [], tr, "none")
+    m = tr.model
+    y0 = tr.state
+    omega = float(y0[Y_OMEGA])
+    if model.flight.is_axial:
+        lam, vecs = np.linalg.eig(jacobian(m, y0))
+        method = "eigenvalues"
+    else:
+        Phi, T = monodromy(m, y0, stable_time_step(m, 1.3 * omega))
+        z, vecs = np.linalg.eig(Phi)
+        lam = np.log(z.astype(complex)) / T
+        method = "floquet"
+    modes = _modes_from_exponents(m, lam, vecs, omega)
+    stable = all(md.real_part_per_s < UNSTABLE_REAL_PART for md in modes)
+    return StabilityResult(stable, modes, tr, method)
+
+
+# ----------------------------------------------------------------------------- map cells
+@dataclass
+class CellResult:
+    cg: float
+    gj_nm2: float
+    verdict: str  #: stable | flutter | divergence | overspeed | no-autorotation | failed
+    stable: bool
+    boundary_kind: str  #: 'flutter' (eigenvalue crossing on the branch), 'fold' (no trim), '' if stable
+    growth_rate_per_s: Optional[float]
+    frequency_hz: Optional[float]
+    omega_trim_rad_s: Optional[float]
+    reason: str = ""
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "CellResult":
+        return cls(**{k: d.get(k) for k in cls.__dataclass_fields__})
+
+
+def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings, method: str = "eigen") -> CellResult:
+    """Classify one (CG, GJ) cell; ``rotor`` already carries the overrides (uniform CG and GJ)."""
+    cg = float(np.mean(rotor.stations.x_cg)); gj = float(np.mean(rotor.stations.gj_nm2))
+    model = compile_model(rotor, flight, settings)
+    if method == "time":
+        from .simulation import Case, Simulation
+        sim = Simulation(Case(rotor, flight, settings, t_end_s=8.0)).run()
+        v = sim.verdict()
+        kind = "" if not v.unstable else ("fold" if not sim.trim.ok else "flutter")
+        return CellResult(cg, gj, v.verdict, v.verdict == "stable", kind, v.growth_rate_per_s, v.frequency_hz,
+                          sim.trim.omega_rad_s if sim.trim.ok else None, v.explanation)
+    res = analyse(model)
+    if not res.trim.ok:
+        be = res.trim.branch_end
+        why = res.trim.reason + (f" (branch ended at mean GJ {be['gj_mean_nm2']:.0f} N m^2/rad)" if be else "")
+        return CellResult(cg, gj, "no-autorotation", False, "fold", None, None, None, why)
+    crit = res.critical
+    if res.stable:
+        return CellResult(cg, gj, "stable", True, "", crit.real_part_per_s, crit.frequency_hz,
+                          res.trim.omega_rad_s, f"least damped: {crit.label}")
+    oscill = crit.frequency_hz >= MIN_FLUTTER_HZ
+    verdict = "flutter" if oscill else "divergence"
+    return CellResult(cg, gj, verdict, False, "flutter", crit.real_part_per_s, crit.frequency_hz,
+                      res.trim.omega_rad_s, f"unstable {crit.label} mode")
