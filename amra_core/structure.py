@@ -116,8 +116,11 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None):
     M = integ(m, Pw, Pw) - integ(m * e, Pw, Pt) - integ(m * e, Pt, Pw)
     Mtt = integ(I, Pt, Pt)
     K2tt = Mtt.copy()
-    if mesh.fidelity != "rigid":  # average of consistent and row-sum lumped torsion mass
-        Mtt = 0.5 * (Mtt + np.diag(Mtt.sum(axis=1)))
+    if mesh.fidelity != "rigid":
+        # average of consistent and lumped torsion mass; the lumped mass of node i is the
+        # integral of I phi_i (the linear shapes sum to one only with the clamped root node, so a
+        # row sum over the free coordinates would lose half of the first element's mass)
+        Mtt = 0.5 * (Mtt + np.diag(Pt.T @ (I * wq)))
         K2tt = Mtt.copy()
     M += Mtt
     if added_mass is not None:
