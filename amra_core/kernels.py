@@ -18,7 +18,7 @@ import numpy as np
 from .airfoil import airfoil_coefficients
 from .jit import kernel
 from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_Y_FIXED, P_A_SOUND,
-                    P_AERO, P_ALPHA_S, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
+                    P_AERO, P_ALPHA_S, P_CLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
                     P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_VH, S_A, S_C, S_R,
                     S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD,
                     Y_ZETA0, Y_ZETAD0)
@@ -46,7 +46,10 @@ def mass_flow(thrust, vx, vc, v0, rho, area):
     Momentum theory ``sqrt(Vx^2 + (Vc + v0)^2)`` outside the turbulent-wake region; inside
     (-2 <= Vc/v_h <= 0, ``Vc`` the climb velocity normal to the disc) V_m is set so that the steady
     inflow equals the empirical curve: ``V_m = sqrt(Vx^2 + (v_h^2 / v_emp)^2)``, blended linearly
-    into momentum theory over EMP_BLEND outside both ends."""
+    into momentum theory over EMP_BLEND outside both ends. Below -2 the blend partner is the
+    windmill-brake root written the same way, ``v_h^2 / v_wb(x)`` (equal to momentum theory's
+    ``|Vc + v0|`` at that root), so V_m does not depend on v0 there and the steady inflow has one
+    root: blending with ``|Vc + v0|`` itself admits a second, unstable root near x = -2."""
     vh = math.sqrt(max(abs(thrust), 1.0) / (2.0 * rho * area))
     mom = math.sqrt(vx * vx + (vc + v0) ** 2)
     x = vc / vh
@@ -55,8 +58,15 @@ def mass_flow(thrust, vx, vc, v0, rho, area):
     xc = min(max(x, -2.0), 0.0)
     poly = EMP_K[0] + xc * (EMP_K[1] + xc * (EMP_K[2] + xc * (EMP_K[3] + xc * EMP_K[4])))
     emp = math.sqrt(vx * vx + (vh / poly) ** 2)
-    w = min(1.0, (x + 2.0 + EMP_BLEND) / EMP_BLEND, (EMP_BLEND - x) / EMP_BLEND)
-    return max(w * emp + (1.0 - w) * mom, 1e-3 * vh)
+    if x >= 0.0:
+        w = (EMP_BLEND - x) / EMP_BLEND
+        return max(w * emp + (1.0 - w) * mom, 1e-3 * vh)
+    if x >= -2.0:
+        return emp
+    w = (x + 2.0 + EMP_BLEND) / EMP_BLEND
+    v_wb = -0.5 * x - math.sqrt(max(0.25 * x * x - 1.0, 0.0))  # windmill-brake root / v_h
+    wb = math.sqrt(vx * vx + (vh / v_wb) ** 2)
+    return max(w * emp + (1.0 - w) * wb, 1e-3 * vh)
 
 
 @kernel
@@ -179,7 +189,7 @@ def rhs(y, dy, m, loads, work):
     for i in range(ns):
         f = work[i]
         for k in range(ns):
-            f -= (m.k0[i, k] + om2 * m.k2[i, k]) * y[x0 + k]
+            f -= (m.k0[i, k] + om2 * m.k2[i, k]) * y[x0 + k] + m.c[i, k] * y[xd0 + k]
         work[ns + i] = f
     for i in range(ns):
         acc = 0.0
@@ -189,7 +199,10 @@ def rhs(y, dy, m, loads, work):
         dy[xd0 + i] = acc
     # rotor speed and lag
     klag = p[P_KLAG] + om2 * p[P_K2LAG]
-    f0 = torque; f1 = lagm0 - klag * y[Y_ZETA0]; f2 = lagm1 - klag * y[Y_ZETA0 + 1]
+    clag = p[P_CLAG]
+    f0 = torque
+    f1 = lagm0 - klag * y[Y_ZETA0] - clag * y[Y_ZETAD0]
+    f2 = lagm1 - klag * y[Y_ZETA0 + 1] - clag * y[Y_ZETAD0 + 1]
     dy[Y_PSI] = om
     if p[P_HOLD_OMEGA] > 0.5:
         dy[Y_OMEGA] = 0.0

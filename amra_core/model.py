@@ -25,8 +25,8 @@ from .structure import assemble
 # --- scalar parameter slots (indices into ModelArrays.p) -------------------------------------
 P_RHO, P_A_SOUND, P_G, P_MASS, P_R, P_R0, P_VH, P_ALPHA_S = range(8)
 P_HOLD_OMEGA, P_HOLD_VD, P_AERO, P_IR, P_ILAG, P_SLAG, P_KLAG, P_K2LAG = range(8, 16)
-P_NQ, P_NST, P_NS, P_QUASI_STATIC = range(16, 20)
-N_P = 20
+P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG = range(16, 21)
+N_P = 21
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
@@ -50,6 +50,7 @@ class ModelArrays(NamedTuple):
     minv: np.ndarray  #: inverse of structural + apparent mass (n_s x n_s)
     k0: np.ndarray  #: stiffness independent of rotor speed
     k2: np.ndarray  #: stiffness per Omega^2
+    c: np.ndarray  #: structural damping (n_s x n_s), see :func:`structural_damping`
     st: np.ndarray  #: (n_st, N_S_COLS) station table
     shw: np.ndarray  #: (2 blades, n_st, n) flap displacement per coordinate (teeter included)
     shd: np.ndarray  #: (2, n_st, n) flap slope d w/d r per coordinate
@@ -201,15 +202,31 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_AERO] = 1.0 if settings.aero == "theodorsen" else 0.0
     p[P_IR], p[P_ILAG], p[P_SLAG], p[P_KLAG], p[P_K2LAG] = s.I_R, s.I_lag, s.S_lag, s.k_lag, s.k2_lag
     p[P_NQ], p[P_NST], p[P_NS] = mesh.n_q, len(r), phi.shape[1]
+    zeta = rotor.structural_damping_ratio
+    p[P_CLAG] = 2.0 * zeta * np.sqrt(s.k_lag * s.I_lag)  # blade lag mode clamped at the hub
     lag_m = np.array([[s.I_R, s.S_lag, s.S_lag], [s.S_lag, s.I_lag, 0.0], [s.S_lag, 0.0, s.I_lag]])
     af = compile_airfoil(load_airfoil(rotor.airfoil))
     arrays = ModelArrays(
-        p=p, minv=minv, k0=k0, k2=k2, st=st,
+        p=p, minv=minv, k0=k0, k2=k2, c=phi.T @ structural_damping(s, zeta) @ phi, st=st,
         shw=np.ascontiguousarray(shw), shd=np.ascontiguousarray(shd), sht=np.ascontiguousarray(sht),
         tip=np.ascontiguousarray(tip), teeter=np.ascontiguousarray(teeter), lag_inv=np.linalg.inv(lag_m),
         af_alpha0=af.alpha0_rad, af_dalpha=af.dalpha_rad, af_cl=af.cl, af_cd=af.cd, af_cm=af.cm,
     )
     return CompiledModel(arrays, mesh.n_q, phi.shape[1], len(r), s.kinds, s, phi, phi_pinv, rotor, flight, settings)
+
+
+def structural_damping(s, zeta: float) -> np.ndarray:
+    """Viscous damping ``C = M Phi diag(2 zeta omega_i) Phi^T M`` in the physical coordinates
+    [beta, q0, q1]: every in-vacuo mode of the non-rotating blade (``K0``, ``M`` mass-normalised
+    ``Phi``) gets the damping ratio ``zeta``; the teeter mode (zero frequency at rest) gets none.
+    Centrifugal stiffening leaves C unchanged, so a mode's ratio falls as the rotor speeds up."""
+    if zeta <= 0.0:
+        return np.zeros_like(s.M)
+    import scipy.linalg as sl
+    w2, V = sl.eigh(s.K0, s.M)
+    omega = np.sqrt(np.clip(w2, 0.0, None))
+    MV = s.M @ V
+    return MV @ np.diag(2.0 * zeta * omega) @ MV.T
 
 
 def _reduction(s, settings: SolverSettings, omega_ref_rad_s: float):

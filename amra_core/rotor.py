@@ -127,7 +127,9 @@ class Rotor:
     Attributes (SI): ``radius_m`` tip radius; ``root_cutout_m`` radius where the
     flexible, lifting blade begins (clamped there to the rigid hub bar);
     ``incidence_rad`` fixed blade pitch at the root (nose up); hub teeter and
-    polar inertias [kg m^2]; ``vehicle_mass_kg`` weight carried by the rotor.
+    polar inertias [kg m^2]; ``vehicle_mass_kg`` weight carried by the rotor;
+    ``structural_damping_ratio`` viscous damping of the blade's own non-rotating flap, torsion
+    and lag modes [fraction of critical] (the seed model has none; 0 reproduces it).
     """
 
     name: str
@@ -141,6 +143,7 @@ class Rotor:
     stations: BladeStations
     point_mass: Optional[PointMass] = None
     airfoil: str = "naca0012_critzos"
+    structural_damping_ratio: float = 0.0
     sources: tuple = field(default=(), compare=False, hash=False)
 
     def __post_init__(self):
@@ -152,6 +155,7 @@ class Rotor:
         _check_number("vehicle_mass_kg", self.vehicle_mass_kg, 0.0, 1e5, lo_open=True)
         _check_number("hub_teeter_inertia_kg_m2", self.hub_teeter_inertia_kg_m2, 0.0, None)
         _check_number("hub_polar_inertia_kg_m2", self.hub_polar_inertia_kg_m2, 0.0, None)
+        _check_number("structural_damping_ratio", self.structural_damping_ratio, 0.0, 0.2)
         r = self.stations.r_m
         if abs(r[0] - r0) > 1e-9:
             _fail("stations.r_m[0]", r[0], f"the first station must be at the root cut-out ({r0} m)")
@@ -199,6 +203,7 @@ class Rotor:
             "hub_teeter_inertia_kg_m2": self.hub_teeter_inertia_kg_m2,
             "hub_polar_inertia_kg_m2": self.hub_polar_inertia_kg_m2,
             "airfoil": self.airfoil,
+            "structural_damping_ratio": self.structural_damping_ratio,
             "point_mass": asdict(self.point_mass) if self.point_mass else None,
             "stations": st,
         }

@@ -23,6 +23,7 @@ _TOP_OPTIONAL = {
     "hub_teeter_inertia_kg_m2": 0.0,
     "hub_polar_inertia_kg_m2": 0.0,
     "airfoil": "naca0012_critzos",
+    "structural_damping_ratio": 0.0,
 }
 _DEG_ALIASES = {"twist_deg": "twist_rad"}
 

@@ -198,7 +198,8 @@ def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
     if not res.trim.ok:
         be = res.trim.branch_end
         why = res.trim.reason + (f" (branch ended at mean GJ {be['gj_mean_nm2']:.0f} N m^2/rad)" if be else "")
-        return CellResult(cg, gj, "no-autorotation", False, "fold", None, None, None, why)
+        verdict = "overspeed" if be.get("runaway") == "overspeed" else "no-autorotation"
+        return CellResult(cg, gj, verdict, False, "fold", None, None, None, why)
     crit = res.critical
     if res.stable:
         return CellResult(cg, gj, "stable", True, "", crit.real_part_per_s, crit.frequency_hz,

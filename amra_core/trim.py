@@ -146,7 +146,8 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
     ok = sol.success or res.max() < 1e-6
     # momentum theory's second windmill root (far wake flowing down) is unphysical and unstable
     windmill_unphysical = (-y[Y_VD] / vh < -2.0 - 0.1) and (-y[Y_VD] + 2 * y[Y_V0] > 0)
-    if not ok or not (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) or windmill_unphysical:
+    if not ok or not (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) or windmill_unphysical \
+            or _inflow_unstable(m, y):
         return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
                           model=model)
     kernels.evaluate(y, a, dy, loads)
@@ -155,6 +156,19 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
     tw = _tip_twist(model, y_full)
     return TrimResult("trimmed", y_full, omega, y[Y_VD], 0.0, 0.0, y[Y_V0], loads[L_THRUST], loads[L_TORQUE],
                       0.0, tw, model=model)
+
+
+def _inflow_unstable(m: CompiledModel, y: np.ndarray) -> bool:
+    """True where the inflow equation alone is unstable at ``y`` (d(dv0/dt)/dv0 > 0): a root of
+    the steady equations on the unphysical side of the turbulent-wake curve, which an eigen
+    analysis would report as a real 'inflow' divergence that no flight test has seen."""
+    h = 1e-4 * max(abs(y[Y_V0]), 1.0)
+    dy = np.zeros(m.n_y); loads = np.zeros(8)
+    yp = y.copy(); yp[Y_V0] += h
+    kernels.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
+    yp[Y_V0] -= 2 * h
+    kernels.evaluate(yp, m.arrays, dy, loads)
+    return (up - dy[Y_V0]) / (2 * h) > 0.0
 
 
 def omega_guess(model: CompiledModel) -> float:
@@ -284,6 +298,23 @@ def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimRe
     return res
 
 
+def _faster_branch(model: CompiledModel, hold, prev: TrimResult) -> Optional[TrimResult]:
+    """A trim of ``model`` faster than the fold point ``prev`` (axial flight), or None."""
+    if not model.flight.is_axial or hold is not None:
+        return None
+    y = transfer_state(prev.state, prev.model, model)
+    for factor in (1.1, 1.25, 1.4):
+        g = y.copy(); g[Y_OMEGA] *= factor
+        res = trim_axial(model, guess=g)
+        if _plausible(res, None) and res.omega_rad_s > prev.omega_rad_s * 1.02:
+            return res
+    return None
+
+
+def gj_mean_of(model: CompiledModel) -> float:
+    return float(np.mean(model.rotor.stations.gj_nm2))
+
+
 def _plausible(res: TrimResult, prev: Optional[TrimResult]) -> bool:
     """Reject solutions off the physical branch: tip Mach above 0.9, or a jump in rotor speed."""
     if not res.ok:
@@ -345,6 +376,7 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
     if hold is not None and not model.flight.is_axial:
         return _solve_at(model, hold, None)  # rotor speed held (Table 1): no autorotation branch to follow
     prev = None
+    first = None
     last_f = None
     for f in list(np.geomspace(stiff_factor, 1.0, n_steps)):
         m_f = model if f == 1.0 else _with_gj_scale(model, f)
@@ -373,14 +405,31 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
                     hi = mid
             gj_mean = float(np.mean(model.rotor.stations.gj_nm2))
             out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
-            out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
-                          "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
+            # which way the rotor speed was heading along the branch tells the two folds apart
+            runaway = "overspeed" if prev.omega_rad_s > first.omega_rad_s else "collapse"
+            if runaway == "overspeed":
+                # the branch may fold back onto a faster one (an S-curve): a trim there is the
+                # state the rotor jumps to; only without one does it run away
+                jump = _faster_branch(model, hold, prev)
+                if jump is not None:
+                    jump.reason = (f"the trim branch through the stiff blade folds at mean GJ "
+                                   f"{gj_mean_of(model) * lo:.0f} N m^2/rad; this trim is on the faster branch")
+                    return jump
+            if runaway == "collapse":
+                out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
+                              "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
+            else:
+                out.reason = ("no steady autorotation: following the trim branch down in GJ, the elastic nose-down "
+                              "twist lowers the blade pitch as the rotor speeds up, until no rotor speed balances "
+                              "the torque (the rotor runs away upwards)")
             out.branch_end = {"gj_scale": float(lo), "gj_mean_nm2": gj_mean * float(lo),
                               "omega_rad_s": float(prev.omega_rad_s),
                               "descent_rate_m_s": float(prev.descent_rate_m_s),
                               "disk_tilt_rad": float(prev.disk_tilt_rad),
-                              "tip_twist_rad": float(prev.tip_twist_rad)}
+                              "tip_twist_rad": float(prev.tip_twist_rad),
+                              "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway}
             out.start = prev
             return out
         prev, last_f = res, f
+        first = first or res
     return prev
