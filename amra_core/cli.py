@@ -25,7 +25,8 @@ def _number(name, lo, hi, integer=False):
         try:
             v = int(text) if integer else float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r} is not a number") from None
+            kind = "an integer" if integer else "a number"
+            raise argparse.ArgumentTypeError(f"{name} = {text!r} is not {kind}: allowed [{lo}, {hi}]") from None
         if not (lo <= v <= hi) or (not integer and not math.isfinite(v)):
             raise argparse.ArgumentTypeError(f"{name} = {text} is out of range: allowed [{lo}, {hi}]")
         return v

@@ -30,9 +30,9 @@ def _check_number(name: str, value, lo=None, hi=None, lo_open=False, hi_open=Fal
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating, np.integer)):
         _fail(name, value, "must be a number")
     v = float(value)
-    if not math.isfinite(v):
-        _fail(name, value, "must be finite")
     rng = f"{'(' if lo_open else '['}{'-inf' if lo is None else lo}, {'inf' if hi is None else hi}{')' if hi_open else ']'}"
+    if not math.isfinite(v):
+        _fail(name, value, f"must be a finite number in {rng}")
     if lo is not None and (v < lo or (lo_open and v == lo)):
         _fail(name, value, f"must lie in {rng}")
     if hi is not None and (v > hi or (hi_open and v == hi)):
