@@ -11,6 +11,7 @@ import math
 import sys
 import time
 
+from . import boundary_cli
 from .flight import FlightCondition, SettingsError, SolverSettings
 from .rotor import RotorError
 from .shapes import FIDELITIES
@@ -241,6 +242,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=_number("--port", 1, 65535, integer=True), default=5006)
     p.add_argument("--address", default="127.0.0.1")
     p.set_defaults(func=cmd_app)
+    boundary_cli.register(sub)
     return ap
 
 
