@@ -1,0 +1,267 @@
+"""Command-line contracts (issue 3): ``amra trim``, ``simulate``, ``modes`` and ``stability`` print
+the documented JSON keys in SI units, ``--out`` writes a CSV whose header carries the units, and
+out-of-range or malformed values exit with code 2 and one line naming the parameter and its range.
+All calls are in-process (``amra_core.cli.main``)."""
+from __future__ import annotations
+
+import csv
+import json
+import math
+import re
+
+import numpy as np
+import pytest
+
+from amra_core.cli import main
+from amra_core.kernels import HISTORY_COLUMNS
+
+G = 9.80665
+WEIGHT_N = 360.0 * G  # McCutcheon preset: vehicle mass 360 kg (model-notes §4)
+RADIUS_M = 3.81
+#: units a CSV/JSON column name may end with
+UNIT_SUFFIX = re.compile(r"_(s|rad|rad_s|m|m_s|n|nm|hz|per_s|kg|kg_m|nm2)$")
+
+
+def _strict_json(text: str):
+    def bad(tok):
+        raise ValueError(f"non-standard JSON constant {tok}")
+    return json.loads(text, parse_constant=bad)
+
+
+def run_cli(capsys, *argv):
+    try:
+        rc = main(list(argv))
+    except SystemExit as exc:
+        rc = exc.code
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def cli_json(capsys, *argv) -> dict:
+    rc, out, err = run_cli(capsys, *argv, "--json")
+    assert rc == 0, err
+    assert "Traceback" not in err
+    return _strict_json(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# trim
+# ---------------------------------------------------------------------------------------------
+def test_trim_axial_json(capsys):
+    d = cli_json(capsys, "trim", "--preset", "mccutcheon")
+    for k in ("omega_rad_s", "descent_rate_m_s", "disk_tilt_rad", "teeter_amplitude_rad", "thrust_n", "torque_nm"):
+        assert k in d, k
+        assert isinstance(d[k], (int, float)) and math.isfinite(d[k]), (k, d[k])
+    assert d["status"] == "trimmed"
+    assert d["thrust_n"] == pytest.approx(WEIGHT_N, rel=0.01)  # thrust balances the weight
+    assert abs(d["torque_nm"]) < 1e-4 * WEIGHT_N * RADIUS_M  # steady autorotation: no net torque
+    # axial autorotation: descending, rotor turning at a sensible tip speed, no tilt or teeter
+    assert d["descent_rate_m_s"] > 0
+    assert 80.0 < d["omega_rad_s"] * RADIUS_M < 250.0
+    assert d["disk_tilt_rad"] == 0.0 and d["teeter_amplitude_rad"] == 0.0
+
+
+def test_trim_table1_case_a(capsys):
+    """Paper Table 1, case A: 14 m/s with the rotor speed held at 38 rad/s, level flight."""
+    d = cli_json(capsys, "trim", "--airspeed", "14", "--omega-hold", "38")
+    assert d["status"] in ("trimmed", "thrust-limited"), d
+    if d["status"] == "thrust-limited":  # model-notes §6: report the largest thrust reached
+        assert "reason" in d and "weight" in d["reason"]
+    assert d["omega_rad_s"] == pytest.approx(38.0, abs=1e-12)
+    assert d["airspeed_m_s"] == pytest.approx(14.0)
+    assert d["descent_rate_m_s"] == pytest.approx(0.0, abs=1e-12)  # level flight
+    assert 0.0 < d["teeter_amplitude_rad"] < 0.2
+    assert d["thrust_n"] > 0.5 * WEIGHT_N
+    # mu = V cos(tilt) / (Omega R)
+    assert d["mu"] == pytest.approx(14.0 * math.cos(d["disk_tilt_rad"]) / (38.0 * RADIUS_M), rel=1e-9)
+
+
+def test_trim_human_readable(capsys):
+    rc, out, err = run_cli(capsys, "trim", "--preset", "mccutcheon")
+    assert rc == 0
+    assert re.search(r"^omega_rad_s\s+\d+\.\d+", out, re.M)
+    assert re.search(r"^thrust_n\s+\d+", out, re.M)
+
+
+def test_trim_without_autorotation_reports_why(capsys):
+    """Paper Fig. 10 parameters: no steady autorotation; still exit 0 with the reason and where the
+    trim branch ended (model-notes §7)."""
+    d = cli_json(capsys, "trim", "--preset", "paper-boundary", "--gj", "100")
+    assert d["status"] == "no-autorotation"
+    assert d["reason"]
+    assert d["branch_end"]["gj_mean_nm2"] > 100.0
+
+
+# ---------------------------------------------------------------------------------------------
+# simulate
+# ---------------------------------------------------------------------------------------------
+SIM_KEYS = ("verdict", "growth_rate_per_s", "frequency_hz", "omega_trim_rad_s", "descent_rate_trim_m_s",
+            "omega_final_rad_s", "teeter_amplitude_rad", "sim_time_s", "wall_time_s")
+
+
+@pytest.fixture(scope="module")
+def simulate_run(tmp_path_factory):
+    """One ``amra simulate --preset mccutcheon --t-end 1 --json --out FILE.csv`` run."""
+    import contextlib
+    import io
+    path = tmp_path_factory.mktemp("sim") / "run.csv"
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        rc = main(["simulate", "--preset", "mccutcheon", "--t-end", "1", "--json", "--quiet", "--out", str(path)])
+    assert rc == 0, err.getvalue()
+    return _strict_json(out.getvalue()), path
+
+
+def test_simulate_json_keys(simulate_run):
+    d, _ = simulate_run
+    for k in SIM_KEYS:
+        assert k in d, k
+    assert d["verdict"] in ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure")
+    for k in SIM_KEYS[1:]:
+        assert isinstance(d[k], (int, float)) and math.isfinite(d[k]), (k, d[k])
+    assert d["sim_time_s"] == pytest.approx(1.0, abs=0.01)
+    assert d["wall_time_s"] > 0
+    assert d["omega_final_rad_s"] == pytest.approx(d["omega_trim_rad_s"], rel=0.02)
+    assert d["descent_rate_trim_m_s"] > 0
+    assert 0.0 < d["teeter_amplitude_rad"] < 0.05  # the 0.01 rad teeter kick, decaying
+
+
+def test_simulate_matches_trim(capsys, simulate_run):
+    d, _ = simulate_run
+    t = cli_json(capsys, "trim", "--preset", "mccutcheon")
+    assert d["omega_trim_rad_s"] == pytest.approx(t["omega_rad_s"], rel=1e-9)
+    assert d["descent_rate_trim_m_s"] == pytest.approx(t["descent_rate_m_s"], rel=1e-9)
+
+
+def test_simulate_csv_header_carries_units(simulate_run):
+    d, path = simulate_run
+    assert d["csv"] == str(path)
+    with open(path, newline="") as fh:
+        header = next(csv.reader(fh))
+    assert tuple(header) == HISTORY_COLUMNS
+    for name in header:
+        assert UNIT_SUFFIX.search(name), f"column {name!r} does not carry a unit"
+    data = np.loadtxt(path, delimiter=",", skiprows=1)
+    assert data.shape[1] == len(header) and data.shape[0] > 100
+    assert np.isfinite(data).all()
+    t = data[:, header.index("t_s")]
+    assert t[0] == 0.0 and np.all(np.diff(t) > 0) and t[-1] <= d["sim_time_s"] + 1e-9
+    om = data[:, header.index("omega_rad_s")]
+    assert om[0] == pytest.approx(d["omega_trim_rad_s"], rel=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# bad values: exit 2, one line naming the parameter and its range
+# ---------------------------------------------------------------------------------------------
+BAD_ARGS = [
+    (["simulate", "--mu", "2"], ["--mu", "2", "[0.0, 0.5]"]),
+    (["simulate", "--mu", "-0.1"], ["--mu", "-0.1", "[0.0, 0.5]"]),
+    (["simulate", "--gj", "-5"], ["--gj", "-5", "[1.0, 1000000.0]"]),
+    (["simulate", "--t-end", "abc"], ["--t-end", "abc", "[0.01, 600.0]"]),
+    (["simulate", "--t-end", "0"], ["--t-end", "0", "[0.01, 600.0]"]),
+    (["simulate", "--t-end", "nan"], ["--t-end", "nan", "[0.01, 600.0]"]),
+    (["simulate", "--fidelity", "foo"], ["--fidelity", "foo", "rigid", "fem-torsion", "fem-coupled"]),
+    (["simulate", "--aero", "potential"], ["--aero", "potential", "quasi-steady", "theodorsen"]),
+    (["simulate", "--cg", "1.5"], ["--cg", "1.5", "[0.0, 1.0]"]),
+    (["simulate", "--elements", "0"], ["--elements", "0", "[1, 60]"]),
+    (["simulate", "--elements", "2.5"], ["--elements", "2.5", "[1, 60]"]),
+    (["trim", "--airspeed", "100"], ["--airspeed", "100", "[0.0, 80.0]"]),
+    (["trim", "--omega-hold", "-3"], ["--omega-hold", "-3", "[1.0, 200.0]"]),
+    (["trim", "--ea", "x"], ["--ea", "x", "[0.0, 1.0]"]),
+    (["modes", "--omega", "1e9"], ["--omega", "1e9", "[0.0, 200.0]"]),
+    (["stability", "--mu", "0.9"], ["--mu", "0.9", "[0.0, 0.5]"]),
+    (["stability", "--preset", "nosuch"], ["preset", "nosuch", "mccutcheon"]),
+]
+
+
+@pytest.mark.parametrize("argv, fragments", BAD_ARGS, ids=[" ".join(a) for a, _ in BAD_ARGS])
+def test_bad_values_exit_2_with_the_range(capsys, argv, fragments):
+    rc, out, err = run_cli(capsys, *argv)
+    assert rc == 2, (rc, err)
+    assert out == ""
+    assert "Traceback" not in err
+    last = err.strip().splitlines()[-1]
+    assert last.startswith(f"amra {argv[0]}: error:"), err
+    for frag in fragments:
+        assert frag in last, f"{frag!r} not in {last!r}"
+
+
+def test_mu_and_airspeed_are_exclusive(capsys):
+    rc, out, err = run_cli(capsys, "trim", "--mu", "0.1", "--airspeed", "10")
+    assert rc == 2 and "not allowed with" in err and "Traceback" not in err
+
+
+def test_unknown_command_exits_2(capsys):
+    rc, out, err = run_cli(capsys, "fly")
+    assert rc == 2 and "invalid choice" in err
+
+
+# ---------------------------------------------------------------------------------------------
+# modes and stability
+# ---------------------------------------------------------------------------------------------
+def test_modes_json_structure(capsys):
+    d = cli_json(capsys, "modes", "--preset", "mccutcheon")
+    assert d["rotor"] == "mccutcheon" and d["fidelity"] == "fem-coupled" and d["elements"] == 10
+    assert d["omega_rad_s"] == 0.0
+    modes = d["modes"]
+    assert len(modes) >= 7
+    for m in modes:
+        assert set(m) == {"label", "frequency_hz", "per_rev"}
+        assert isinstance(m["label"], str) and math.isfinite(m["frequency_hz"])
+        assert m["per_rev"] is None  # no rotor speed, no per-rev value
+    f = [m["frequency_hz"] for m in modes]
+    assert f == sorted(f)
+    labels = [m["label"] for m in modes]
+    assert labels[0] == "teeter" and f[0] == 0.0  # free teeter at rest: rigid-body mode
+    assert "torsion 1 (collective)" in labels and "flap 1 (collective)" in labels
+    assert len(set(labels)) == len(labels)
+
+
+def test_modes_rotating_per_rev(capsys):
+    omega = 38.7
+    d = cli_json(capsys, "modes", "--preset", "mccutcheon", "--omega", str(omega), "--fidelity", "rigid")
+    by = {m["label"]: m for m in d["modes"]}
+    assert by["teeter"]["per_rev"] == pytest.approx(1.0, abs=1e-3)  # rigid teeter exactly 1/rev
+    for m in d["modes"]:
+        assert m["per_rev"] == pytest.approx(m["frequency_hz"] * 2 * math.pi / omega, abs=2e-3)
+
+
+@pytest.mark.parametrize("flight", [[], ["--mu", "0.1"]], ids=["axial", "mu0.1"])
+def test_stability_json(capsys, flight):
+    d = cli_json(capsys, "stability", "--preset", "mccutcheon", *flight)
+    assert isinstance(d["stable"], bool)
+    assert d["method"] == ("eigenvalues" if not flight else "floquet")
+    assert d["trim"]["status"] == "trimmed"
+    assert d["modes"]
+    for m in d["modes"]:
+        for k in ("label", "frequency_hz", "damping_ratio", "real_part_per_s"):
+            assert k in m, k
+        assert isinstance(m["label"], str)
+        assert m["label"] != "aero lag"  # listed only with --all-modes
+        assert m["frequency_hz"] >= 0.0
+        # damping ratio is -Re(lambda)/|lambda|
+        w = math.hypot(m["real_part_per_s"], 2 * math.pi * m["frequency_hz"])
+        assert m["damping_ratio"] == pytest.approx(-m["real_part_per_s"] / w, rel=1e-6, abs=1e-12)
+    assert d["stable"] == all(m["real_part_per_s"] < 1e-3 for m in d["modes"])
+    assert d["stable"] is True  # nominal McCutcheon blade (model-notes §6)
+
+
+def test_stability_all_modes_adds_aero_lag(capsys):
+    d = cli_json(capsys, "stability", "--preset", "mccutcheon", "--all-modes")
+    labels = [m["label"] for m in d["modes"]]
+    assert "aero lag" in labels
+    lag = [m for m in d["modes"] if m["label"] == "aero lag"]
+    assert all(m["real_part_per_s"] < 0 for m in lag)
+
+
+def test_stability_no_trim(capsys):
+    d = cli_json(capsys, "stability", "--preset", "paper-boundary", "--gj", "100")
+    assert d["stable"] is False and d["modes"] == []
+    assert d["trim"]["status"] == "no-autorotation" and d["reason"]
+
+
+def test_stability_human_readable(capsys):
+    rc, out, err = run_cli(capsys, "stability", "--preset", "mccutcheon")
+    assert rc == 0
+    assert out.startswith("stable: True")
+    assert "f [Hz]" in out and "zeta [-]" in out
