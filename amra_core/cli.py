@@ -218,7 +218,8 @@ def build_parser() -> argparse.ArgumentParser:
     _rotor_args(p)
     _flight_args(p)
     p.add_argument("--aero", choices=("quasi-steady", "theodorsen"), default="theodorsen")
-    p.add_argument("--inflow", choices=("uniform",), default="uniform")
+    p.add_argument("--inflow", choices=("uniform", "three-state"), default="uniform",
+                   help="uniform (Pitt-Peters) or three-state (Peters-HaQuang first harmonics)")
     p.add_argument("--t-end", type=_number("--t-end", 0.01, 600.0), default=10.0, help="simulated time [s]")
     p.add_argument("--out", metavar="FILE.csv", help="write the time histories as CSV")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -8,7 +8,7 @@ from .rotor import _check_number
 from .shapes import FIDELITIES
 
 AERO_MODELS = ("quasi-steady", "theodorsen")
-INFLOW_MODELS = ("uniform",)
+INFLOW_MODELS = ("uniform", "three-state")
 
 
 class SettingsError(ValueError):
@@ -61,6 +61,8 @@ class SolverSettings:
 
     ``fidelity``: ``rigid`` | ``fem-torsion`` | ``fem-coupled``; ``aero``: ``theodorsen`` (Wagner,
     two states per station; default) | ``quasi-steady`` (3/4-chord angle and pitch-rate terms);
+    ``inflow``: ``uniform`` (Pitt-Peters uniform inflow with the turbulent-wake curve; default) |
+    ``three-state`` (adds Peters-HaQuang first-harmonic sine and cosine inflow states);
     ``n_elements``: FEM elements per blade; ``n_stations``: aerodynamic (Gauss) stations per blade;
     ``dt_s``: time step [s] (``None``: chosen from the stiffest mode, see :mod:`amra_core.model`);
     ``max_mode_hz``: FEM levels keep the structural modes below this frequency [Hz] at the

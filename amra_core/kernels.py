@@ -19,7 +19,7 @@ from .airfoil import airfoil_coefficients
 from .jit import kernel
 from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
-                    P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_VH, S_A, S_C, S_R,
+                    P_INFLOW3, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_VH, S_A, S_C, S_R,
                     S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD,
                     Y_ZETA0, Y_ZETAD0)
 
@@ -133,7 +133,11 @@ def station_kinematics(y, m, b, j, vx, vup):
         th += m.sht[b, j, k] * q
         thd += m.sht[b, j, k] * qd
     ut = y[Y_OMEGA] * r + vx * math.sin(psib) + (r - p[P_R0]) * y[Y_ZETAD0 + b]
-    up = vup - y[Y_V0] - wdot - vx * math.cos(psib) * wp
+    vi = y[Y_V0]
+    if p[P_INFLOW3] > 0.5:  # first-harmonic inflow states are the last two of the state
+        ih = y.shape[0] - 2
+        vi += r / p[P_R] * (y[ih] * math.sin(psib) + y[ih + 1] * math.cos(psib))
+    up = vup - vi - wdot - vx * math.cos(psib) * wp
     return ut, up, m.st[j, S_THETA0] + th, thd, wp, w, th
 
 
@@ -159,6 +163,7 @@ def rhs(y, dy, m, loads, work):
         work[i] = 0.0
     thrust = 0.0; torque = 0.0; hforce = 0.0
     lagm0 = 0.0; lagm1 = 0.0
+    mom_s = 0.0; mom_c = 0.0  # first moments of the normal force (sine and cosine of azimuth)
     a_sound = p[P_A_SOUND]
     for b in range(2):
         psib = psi + b * math.pi
@@ -178,6 +183,8 @@ def rhs(y, dy, m, loads, work):
             for k in range(ns):
                 work[k] += m.shw[b, j, k] * fz + m.sht[b, j, k] * my
             thrust += fz
+            mom_s += fz * r * sp
+            mom_c += fz * r * cp
             torque += r * ffwd * wgt
             if b == 0:
                 lagm0 += (r - r0) * ffwd * wgt
@@ -221,9 +228,42 @@ def rhs(y, dy, m, loads, work):
     dy[Y_VD] = 0.0 if p[P_HOLD_VD] > 0.5 else p[P_G] - fvert / p[P_MASS]
     area = math.pi * R * R
     vm = mass_flow(thrust, vx, -vup, y[Y_V0], rho, area)
-    dy[Y_V0] = (thrust - 2.0 * rho * area * vm * y[Y_V0]) * 3.0 / (8.0 * rho * R * R * R)
+    if p[P_INFLOW3] > 0.5:
+        inflow_harmonics(y, dy, thrust, mom_s, mom_c, vx, vup, vm, rho, R)
+    else:
+        dy[Y_V0] = (thrust - 2.0 * rho * area * vm * y[Y_V0]) * 3.0 / (8.0 * rho * R * R * R)
     loads[L_THRUST] = thrust; loads[L_TORQUE] = torque; loads[L_HFORCE] = hforce
     loads[L_FVERT] = fvert; loads[L_FHORIZ] = fhoriz; loads[L_VM] = vm
+
+
+@kernel
+def inflow_harmonics(y, dy, thrust, mom_s, mom_c, vx, vup, vm, rho, R):
+    """Peters-HaQuang three-state inflow ``v0 + (r/R)(v_s sin psi + v_c cos psi)`` [m/s].
+
+    Dimensional form of ``M lambda' + V L^-1 lambda = (C_T, C_L, C_M)``: apparent masses
+    ``(8/3) rho R^3`` and ``(16/45) rho R^4``, ``L`` of Pitt-Peters with the wake skew angle
+    ``chi = atan(|V_x| / |V_c - v0|)`` (``L11 = 1/2``, ``L22 = 4/(1+cos chi)``,
+    ``L33 = 4 cos chi/(1+cos chi)``, ``L13 = 15 pi/64 tan(chi/2)``), and every row scaled by the
+    mass-flow parameter ``vm`` of :func:`mass_flow` (so the mean inflow keeps the turbulent-wake
+    curve; in axial flight the v0 equation is the uniform model's). The (v0, v_c) block of L is
+    ``[[1/2, -L13], [L13, L33]]`` in these signs (thrust alone gives Pitt-Peters' longitudinal
+    gradient ``v_c = (15 pi/32) tan(chi/2) v0``, more inflow at the rear), which stays regular for
+    every skew angle. Forcing: thrust and the
+    first moments of the normal force about the azimuth axes (``mom_s`` towards psi = 90 deg,
+    ``mom_c`` towards psi = 0, the tail), so more lift on one side makes more inflow there."""
+    ih = y.shape[0] - 2
+    v0 = y[Y_V0]; vs = y[ih]; vc = y[ih + 1]
+    chi = math.atan2(abs(vx), abs(vup - v0) + 1e-9)
+    cchi = math.cos(chi)
+    l11 = 0.5; l13 = 15.0 * math.pi / 64.0 * math.tan(0.5 * chi)
+    l22 = 4.0 / (1.0 + cchi); l33 = 4.0 * cchi / (1.0 + cchi)
+    det = l11 * l33 + l13 * l13  # [[l11, -l13], [l13, l33]]^-1 = [[l33, l13], [-l13, l11]] / det
+    i11 = l33 / det; i13 = l13 / det; i31 = -l13 / det; i33 = l11 / det
+    a_r = math.pi * rho * R * R
+    dy[Y_V0] = (thrust - a_r * vm * (i11 * v0 + i13 * vc)) * 3.0 / (8.0 * rho * R * R * R)
+    m_h = 16.0 / 45.0 * rho * R * R * R * R
+    dy[ih] = (mom_s - a_r * R * vm * vs / l22) / m_h
+    dy[ih + 1] = (mom_c - a_r * R * vm * (i31 * v0 + i33 * vc)) / m_h
 
 
 @kernel

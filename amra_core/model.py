@@ -25,8 +25,8 @@ from .structure import assemble
 # --- scalar parameter slots (indices into ModelArrays.p) -------------------------------------
 P_RHO, P_A_SOUND, P_G, P_MASS, P_R, P_R0, P_VH, P_ALPHA_S = range(8)
 P_HOLD_OMEGA, P_HOLD_VD, P_AERO, P_IR, P_ILAG, P_SLAG, P_KLAG, P_K2LAG = range(8, 16)
-P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG = range(16, 21)
-N_P = 21
+P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG, P_INFLOW3 = range(16, 22)
+N_P = 22
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
@@ -82,8 +82,17 @@ class CompiledModel:
     settings: SolverSettings
 
     @property
+    def n_inflow_harmonics(self) -> int:
+        """2 (sine and cosine inflow states, last in the state) with the three-state model."""
+        return 2 if self.settings.inflow == "three-state" else 0
+
+    @property
     def n_y(self) -> int:
-        return N_Y_FIXED + 2 * self.n_s + 4 * self.n_st
+        return N_Y_FIXED + 2 * self.n_s + 4 * self.n_st + self.n_inflow_harmonics
+
+    def inflow_harmonics_slice(self):
+        """First-harmonic inflow [v_s, v_c] in m/s (empty with uniform inflow)."""
+        return slice(self.n_y - self.n_inflow_harmonics, self.n_y)
 
     def x_slice(self):
         return slice(N_Y_FIXED, N_Y_FIXED + self.n_s)
@@ -92,7 +101,7 @@ class CompiledModel:
         return slice(N_Y_FIXED + self.n_s, N_Y_FIXED + 2 * self.n_s)
 
     def aero_slice(self):
-        return slice(N_Y_FIXED + 2 * self.n_s, self.n_y)
+        return slice(N_Y_FIXED + 2 * self.n_s, N_Y_FIXED + 2 * self.n_s + 4 * self.n_st)
 
     def torsion_index(self, blade: int) -> np.ndarray:
         """Positions in the physical ``x`` of blade ``blade``'s torsion coordinates."""
@@ -136,6 +145,8 @@ def transfer_state(y: np.ndarray, source: "CompiledModel", target: "CompiledMode
     target.set_physical(out, x, xd)
     if source.n_st == target.n_st:
         out[target.aero_slice()] = y[source.aero_slice()]
+    if source.n_inflow_harmonics == target.n_inflow_harmonics:
+        out[target.inflow_harmonics_slice()] = y[source.inflow_harmonics_slice()]
     return out
 
 
@@ -203,6 +214,7 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_IR], p[P_ILAG], p[P_SLAG], p[P_KLAG], p[P_K2LAG] = s.I_R, s.I_lag, s.S_lag, s.k_lag, s.k2_lag
     p[P_NQ], p[P_NST], p[P_NS] = mesh.n_q, len(r), phi.shape[1]
     zeta = rotor.structural_damping_ratio
+    p[P_INFLOW3] = 1.0 if settings.inflow == "three-state" else 0.0
     p[P_CLAG] = 2.0 * zeta * np.sqrt(s.k_lag * s.I_lag)  # blade lag mode clamped at the hub
     lag_m = np.array([[s.I_R, s.S_lag, s.S_lag], [s.S_lag, s.I_lag, 0.0], [s.S_lag, 0.0, s.I_lag]])
     af = compile_airfoil(load_airfoil(rotor.airfoil))

@@ -77,7 +77,7 @@ def _participation(model: CompiledModel, v: np.ndarray, omega: float, real_mode:
     g = {
         "rotor speed": abs(y[Y_OMEGA]) / omega,
         "descent": abs(y[Y_VD]) / vt * 10.0,
-        "inflow": abs(y[Y_V0]) / vt * 10.0,
+        "inflow": (abs(y[Y_V0]) + float(np.abs(y[model.inflow_harmonics_slice()]).sum())) / vt * 10.0,
         "lag": math.hypot(abs(y[Y_ZETA0]) + abs(y[Y_ZETA0 + 1]), (abs(y[Y_ZETAD0]) + abs(y[Y_ZETAD0 + 1])) / omega),
         "teeter": math.hypot(abs(a.teeter @ q), abs(a.teeter @ qd) / omega),
     }
