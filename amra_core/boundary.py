@@ -13,7 +13,8 @@ in every CG column); then, per column, every pair of neighbouring cells in diffe
 log GJ until ``gj_hi / gj_lo <= 1 + gj_rel_tol``. Each bracket keeps one cell in flight, so the
 columns (and several transitions of one column) proceed in parallel. A transition the coarse grid
 does not see (a stable window narrower than the coarse spacing) is not found: refine ``n_coarse``.
-Pairs involving a failed cell are not bisected.
+Pairs with a failed cell are bisected too, which locates the edge of the failed region; such
+transitions have kind ``unknown`` and are never ``resolved``.
 
 Every finished cell is handed out as soon as it is known (``on_cell``, or iterate
 :func:`iter_map`); a ``threading.Event`` ``cancel`` is checked between cells (and at least every
@@ -484,9 +485,9 @@ class MapRun:
 
     def _maybe_bisect(self, cg, lo: CellResult, hi: CellResult, submit) -> None:
         a, b = cell_class(lo), cell_class(hi)
-        if a == b or "failed" in (a, b):
+        if a == b:
             return
-        if not self.spec.bisect_fold and "stable" not in (a, b):
+        if not self.spec.bisect_fold and "stable" not in (a, b) and "failed" not in (a, b):
             return
         if hi.gj_nm2 / lo.gj_nm2 <= 1.0 + self.spec.gj_rel_tol:
             return
