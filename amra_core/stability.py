@@ -84,8 +84,8 @@ def _participation(model: CompiledModel, v: np.ndarray, omega: float, real_mode:
     fl = sum(math.hypot(abs(a.tip[b, 0] @ q - (1 - 2 * b) * R * (a.teeter @ q)),
                         abs(a.tip[b, 0] @ qd - (1 - 2 * b) * R * (a.teeter @ qd)) / omega) for b in (0, 1)) / R
     tw = sum(math.hypot(abs(a.tip[b, 1] @ q), abs(a.tip[b, 1] @ qd) / omega) for b in (0, 1))
-    g["flap"] = fl
-    g["torsion"] = tw
+    g["flap"] = 0.5 * fl  # per blade, as the teeter angle is counted once for the rotor
+    g["torsion"] = 0.5 * tw
     tot = sum(g.values())
     aero = float(np.abs(y[model.aero_slice()]).sum()) / vt
     if real_mode and tot < aero:  # a non-oscillatory mode dominated by the Wagner lag states
@@ -141,6 +141,37 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float):
     return Phi, T
 
 
+def averaged_jacobian(model: CompiledModel, y0: np.ndarray, period_s: float, n_points: int = 4) -> np.ndarray:
+    """Mean of the Jacobian at ``n_points`` azimuths along the periodic orbit through ``y0``
+    (the constant-coefficient approximation of the periodic system)."""
+    y = y0.copy()
+    hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, len(y)))
+    steps = 16
+    J = np.zeros((len(y) - 1, len(y) - 1))
+    for _ in range(n_points):
+        J += jacobian(model, y) / n_points
+        kernels.advance(y, 0.0, period_s / n_points / steps, steps, 10**9, model.arrays, hist, st, -1.0)
+    return J
+
+
+def unfold_floquet(lam: np.ndarray, j_avg: np.ndarray, omega: float, k_max: int = 12) -> np.ndarray:
+    """Floquet exponents are defined up to ``i k Omega``; pick for each the branch nearest an
+    eigenvalue of the averaged Jacobian, so a 28 Hz torsion mode is reported at 28 Hz and not
+    folded into the first rotor harmonic. Each averaged eigenvalue is used once (an assignment),
+    so the many real aerodynamic-lag eigenvalues cannot all claim the same exponent."""
+    from scipy.optimize import linear_sum_assignment
+    mu = np.linalg.eigvals(j_avg)
+    ks = 1j * omega * np.arange(-k_max, k_max + 1)
+    cands = lam[:, None] + ks[None, :]  # (n, 2 k_max + 1)
+    dist = np.abs(cands[:, :, None] - mu[None, None, :])  # (n, k, n)
+    best_k = np.argmin(dist, axis=1)  # (n, n): best shift of exponent i towards eigenvalue j
+    cost = np.take_along_axis(dist, best_k[:, None, :], axis=1)[:, 0, :]
+    rows, cols = linear_sum_assignment(cost)
+    out = lam.copy()
+    out[rows] = cands[rows, best_k[rows, cols]]
+    return out
+
+
 def analyse(model: CompiledModel, trim_result: Optional[TrimResult] = None) -> StabilityResult:
     """Eigenvalues (axial) or Floquet exponents (forward) about the trim of ``model``."""
     tr = trim_result if trim_result is not None else trim(model)
@@ -155,7 +186,7 @@ def analyse(model: CompiledModel, trim_result: Optional[TrimResult] = None) -> S
     else:
         Phi, T = monodromy(m, y0, stable_time_step(m, 1.3 * omega))
         z, vecs = np.linalg.eig(Phi)
-        lam = np.log(z.astype(complex)) / T
+        lam = unfold_floquet(np.log(z.astype(complex)) / T, averaged_jacobian(m, y0, T), omega)
         method = "floquet"
     modes = _modes_from_exponents(m, lam, vecs, omega)
     stable = all(md.real_part_per_s < UNSTABLE_REAL_PART for md in modes)
