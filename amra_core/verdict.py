@@ -103,7 +103,8 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     cols = {c: i for i, c in enumerate(columns)}
     h = history
     if status == "numerical-failure" or not np.isfinite(h).all():
-        return Verdict("numerical-failure", None, None, None, explanation="non-finite state: the run was stopped")
+        return Verdict("numerical-failure", None, None, None, explanation=("the time step left its stability region (non-finite state or an impossible "
+                                     "jump of the rotor speed): the run was stopped; try a smaller dt_s"))
     t = h[:, cols["t_s"]]
     om = h[:, cols["omega_rad_s"]]
     below = np.nonzero(om < 0.5 * omega_ref)[0]

@@ -268,12 +268,6 @@ def test_non_finite_state_is_numerical_failure(mccutcheon, slot):
     sim.spanwise_last_revolution()
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "an explicit RK4 step far beyond the stability limit (dt_s = 0.01 s, theodorsen, McCutcheon "
-    "axial; the automatic step is 0.00296 s) throws the rotor speed from 38.7 to -2.5e6 rad/s in one "
-    "step; kernels.advance stops on omega < 2 % of trim (status rotor-stopped) before the state "
-    "turns non-finite, so the blow-up is reported as the physical verdict 'divergence' "
-    "(rotor speed collapsed) instead of numerical-failure"))
 def test_explicit_step_blow_up_is_not_a_physical_verdict(mccutcheon):
     sim = new_sim(mccutcheon, dt_s=0.01)
     sim.run(t_end_s=2.0)
