@@ -171,6 +171,7 @@ def test_repeated_map_is_served_from_the_store_at_once(tmp_path):
     assert [c.to_dict() for c in again.cells] == [c.to_dict() for c in first.cells]
 
 
+@pytest.mark.slow
 def test_full_default_map_repeated_from_store_under_one_second(tmp_path):
     """Issue 4 target: the 16-column map read back from the store in <= 1 s."""
     path = tmp_path / "cells.sqlite"
