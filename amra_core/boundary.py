@@ -456,7 +456,7 @@ class MapRun:
                     if cached:
                         self.cached += 1
                     elif self.store is not None:
-                        self.store.put(key, spec.case_params(cg, cell.gj_nm2), cell)
+                        self._put(key, spec.case_params(cg, cell.gj_nm2), cell)
                     if role[0] == "coarse":
                         pending_coarse[cg] -= 1
                         if pending_coarse[cg] == 0:
@@ -482,6 +482,17 @@ class MapRun:
                 ex.close()
             self.wall_time_s = time.perf_counter() - self._t0
             self._finished = True
+
+    def _put(self, key, params, cell) -> None:
+        """Store a finished cell; a store that fails while writing (disk full, locked for longer
+        than its busy timeout) is reported once and the map carries on without it."""
+        try:
+            self.store.put(key, params, cell)
+        except Exception as exc:  # noqa: BLE001 - the map is worth more than its cache
+            import warnings
+            self.store_error = f"result store write failed ({type(exc).__name__}: {exc}); continuing without it"
+            warnings.warn(self.store_error, RuntimeWarning, stacklevel=2)
+            self.store = None
 
     def _maybe_bisect(self, cg, lo: CellResult, hi: CellResult, submit) -> None:
         a, b = cell_class(lo), cell_class(hi)
