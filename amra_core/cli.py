@@ -12,6 +12,7 @@ import sys
 import time
 
 from . import boundary_cli
+from . import validate_cli
 from .flight import FlightCondition, SettingsError, SolverSettings
 from .rotor import RotorError
 from .shapes import FIDELITIES
@@ -244,6 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--address", default="127.0.0.1")
     p.set_defaults(func=cmd_app)
     boundary_cli.register(sub)
+    validate_cli.register(sub)
     return ap
 
 
