@@ -308,10 +308,12 @@ def run(sec: Section) -> Section:
         fp = fan_plot(mc, omegas, "fem-coupled", n_el, n_modes=12)
         fig = new_figure(8, 5.5)
         ax = fig.add_subplot(111)
-        for m in fp["modes"]:
+        import matplotlib
+        colours = list(matplotlib.colormaps["tab10"].colors) + list(matplotlib.colormaps["Dark2"].colors)
+        for i, m in enumerate(fp["modes"]):
             lab = m["label"]
             style = "-" if "collective" in lab or lab == "teeter" else "--"
-            ax.plot(fp["omega_rad_s"], m["frequency_hz"], style, lw=1.3, label=lab)
+            ax.plot(fp["omega_rad_s"], m["frequency_hz"], style, lw=1.4, color=colours[i % len(colours)], label=lab)
         for n in range(1, 9):
             ax.plot(omegas, n * omegas / (2 * math.pi), color="0.7", lw=0.6, zorder=0)
             ax.text(omegas[-1], n * omegas[-1] / (2 * math.pi), f" {n}/rev", fontsize=7, color="0.5", va="center")
