@@ -73,7 +73,8 @@ def _versions() -> dict:
 
 def run_validation(out_dir, quick: bool = False, progress: Optional[Callable[[str], None]] = None,
                    sections: Optional[tuple] = None) -> ValidationResult:
-    """Run every section, write ``report.html`` and ``results.json`` into ``out_dir`` (created),
+    """Run every section, write ``report.html``, ``results.json`` and ``summary.md`` (markdown table)
+    into ``out_dir`` (created),
     and return the :class:`ValidationResult`. ``progress(msg)`` receives one-line progress
     messages; ``sections`` optionally restricts to some section names."""
     import importlib
@@ -111,6 +112,7 @@ def run_validation(out_dir, quick: bool = False, progress: Optional[Callable[[st
     html_path, json_path = out / "report.html", out / "results.json"
     report.write_json(json_path, done, meta)
     report.write_html(html_path, done, meta)
+    (out / "summary.md").write_text(report.summary_markdown(cases, meta) + "\n", encoding="utf-8")
     return ValidationResult(done, meta, html_path, json_path)
 
 

@@ -145,6 +145,7 @@ def new_figure(w=7.5, h=4.5, **kw):
     """A matplotlib Figure on the Agg canvas (no pyplot, no global state)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure as MplFigure
+    kw.setdefault("layout", "constrained")
     fig = MplFigure(figsize=(w, h), dpi=100, **kw)
     FigureCanvasAgg(fig)
     return fig

@@ -127,7 +127,10 @@ def summary_text(cases) -> str:
 def summary_markdown(cases, meta: dict) -> str:
     def cell(v):
         return _fmt(v).replace("|", "\\|").replace("\n", " ")
-    out = ["| id | case | reference | value | unit | tolerance | status |", "|---|---|---|---|---|---|---|"]
+    n = counts(cases)
+    out = [f"Mode: {meta.get('mode')}, {meta.get('created')}, wall time {meta.get('wall_time_s', 0):.0f} s, "
+           f"solver commit {meta.get('git_commit')}. Counts: " + ", ".join(f"{k} {v}" for k, v in sorted(n.items())) + ".",
+           "", "| id | case | reference | value | unit | tolerance | status |", "|---|---|---|---|---|---|---|"]
     for c in cases:
         out.append(f"| `{c.id}` | {cell(c.title)} | {cell(c.reference)} | {cell(c.value)} | {cell(c.unit)} | "
                    f"{cell(c.tolerance)} | **{c.status}** |")

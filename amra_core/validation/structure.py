@@ -166,6 +166,10 @@ def run(sec: Section) -> Section:
             n = np.asarray(n_all, float)
             ax.loglog(n, 0.5 * np.abs(errs[2, 0]) * (n / n[2]) ** -4, "k--", lw=0.8, label="slope −4")
             ax.axhline(0.005, color="r", lw=0.8, ls=":", label="0.5 % tolerance")
+            from matplotlib.ticker import NullFormatter, ScalarFormatter
+            ax.set_xticks(list(n_all))
+            ax.xaxis.set_major_formatter(ScalarFormatter())
+            ax.xaxis.set_minor_formatter(NullFormatter())
             ax.set_xlabel("elements per blade"); ax.set_ylabel("|relative frequency error|")
             ax.set_title(f"uniform {kind}"); ax.grid(True, which="both", alpha=0.3); ax.legend(fontsize=7)
         return fig
