@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from .airfoil import airfoil_coefficients
-from .jit import kernel
+from .jit import inline_kernel, kernel
 from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
                     P_INFLOW3, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_VH, S_A, S_C, S_R,
@@ -69,7 +69,7 @@ def mass_flow(thrust, vx, vc, v0, rho, area):
     return max(w * emp + (1.0 - w) * wb, 1e-3 * vh)
 
 
-@kernel
+@inline_kernel
 def wagner(wn, v, c, x1, x2):
     """R.T. Jones two-state Wagner lag of the velocity ``wn`` normal to the chord [m/s].
     Returns (effective normal velocity, dx1/dt, dx2/dt); ``x1, x2`` are the lag states [m/s],
@@ -80,7 +80,7 @@ def wagner(wn, v, c, x1, x2):
             rate * B2 * (A2 * wn - x2))
 
 
-@kernel
+@inline_kernel
 def station_aero(ut, up, theta, thd, c, xea, xac, a, x1, x2, theo, rho, a_sound,
                  af0, daf, cl_t, cd_t, cm_t):
     """Loads per unit span at one blade station.
@@ -115,14 +115,15 @@ def station_aero(ut, up, theta, thd, c, xea, xac, a, x1, x2, theo, rho, a_sound,
     return fup, ffwd, mea, d1, d2
 
 
-@kernel
-def station_kinematics(y, m, b, j, vx, vup):
+@inline_kernel
+def station_kinematics(y, m, b, j, vx, vup, sp, cp, hs, hc):
     """Blade ``b``, station ``j``: (U_T, U_P, total pitch, elastic pitch rate, flap slope,
-    flap displacement, elastic twist) from the state ``y`` (see :mod:`amra_core.model`)."""
+    flap displacement, elastic twist) from the state ``y`` (see :mod:`amra_core.model`).
+    ``sp``, ``cp``: sine and cosine of the blade's azimuth; ``hs``, ``hc``: first-harmonic inflow
+    per unit radius [1/s] (see :func:`inflow_gradients`)."""
     p = m.p
     ns = int(p[P_NS])
     x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns
-    psib = y[Y_PSI] + b * math.pi
     r = m.st[j, S_R]
     w = 0.0; wdot = 0.0; wp = 0.0; th = 0.0; thd = 0.0
     for k in range(ns):
@@ -132,16 +133,22 @@ def station_kinematics(y, m, b, j, vx, vup):
         wp += m.shd[b, j, k] * q
         th += m.sht[b, j, k] * q
         thd += m.sht[b, j, k] * qd
-    ut = y[Y_OMEGA] * r + vx * math.sin(psib) + (r - p[P_R0]) * y[Y_ZETAD0 + b]
-    vi = y[Y_V0]
-    if p[P_INFLOW3] > 0.5:  # first-harmonic inflow states are the last two of the state
-        ih = y.shape[0] - 2
-        vi += r / p[P_R] * (y[ih] * math.sin(psib) + y[ih + 1] * math.cos(psib))
-    up = vup - vi - wdot - vx * math.cos(psib) * wp
+    ut = y[Y_OMEGA] * r + vx * sp + (r - p[P_R0]) * y[Y_ZETAD0 + b]
+    vi = y[Y_V0] + r * (hs * sp + hc * cp)
+    up = vup - vi - wdot - vx * cp * wp
     return ut, up, m.st[j, S_THETA0] + th, thd, wp, w, th
 
 
-@kernel
+@inline_kernel
+def inflow_gradients(y, m):
+    """(v_s / R, v_c / R) [1/s] of the three-state inflow (the last two states), or zeros."""
+    if m.p[P_INFLOW3] > 0.5:
+        ih = y.shape[0] - 2
+        return y[ih] / m.p[P_R], y[ih + 1] / m.p[P_R]
+    return 0.0, 0.0
+
+
+@inline_kernel
 def free_stream(y, m):
     """(in-plane, up-through-disc) free-stream components [m/s] for the shaft tilt and airspeed."""
     ca = math.cos(m.p[P_ALPHA_S]); sa = math.sin(m.p[P_ALPHA_S])
@@ -165,12 +172,13 @@ def rhs(y, dy, m, loads, work):
     lagm0 = 0.0; lagm1 = 0.0
     mom_s = 0.0; mom_c = 0.0  # first moments of the normal force (sine and cosine of azimuth)
     a_sound = p[P_A_SOUND]
+    hs, hc = inflow_gradients(y, m)
     for b in range(2):
         psib = psi + b * math.pi
         sp = math.sin(psib); cp = math.cos(psib)
         for j in range(nst):
             r = m.st[j, S_R]; c = m.st[j, S_C]; xea = m.st[j, S_XEA]
-            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
+            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup, sp, cp, hs, hc)
             ia = a0 + 2 * (b * nst + j)
             fup, ffwd, mea, d1, d2 = station_aero(ut, up, theta, thd, c, xea,
                                                   m.st[j, S_XAC], m.st[j, S_A], y[ia], y[ia + 1],
@@ -272,9 +280,11 @@ def steady_wagner_states(y, m):
     nst = int(m.p[P_NST]); ns = int(m.p[P_NS])
     a0 = N_Y_FIXED + 2 * ns
     vx, vup = free_stream(y, m)
+    hs, hc = inflow_gradients(y, m)
     for b in range(2):
+        sp = math.sin(y[Y_PSI] + b * math.pi); cp = math.cos(y[Y_PSI] + b * math.pi)
         for j in range(nst):
-            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
+            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup, sp, cp, hs, hc)
             c = m.st[j, S_C]
             v = math.sqrt(ut * ut + up * up) + 1e-9
             up34 = up + thd * (0.75 - m.st[j, S_XEA]) * c
@@ -294,9 +304,11 @@ def station_loads(y, m, out):
     a0 = N_Y_FIXED + 2 * ns
     theo = p[P_AERO] > 0.5 and p[P_QUASI_STATIC] < 0.5
     vx, vup = free_stream(y, m)
+    hs, hc = inflow_gradients(y, m)
     for b in range(2):
+        sp = math.sin(y[Y_PSI] + b * math.pi); cp = math.cos(y[Y_PSI] + b * math.pi)
         for j in range(nst):
-            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup)
+            ut, up, theta, thd, wp, w, th = station_kinematics(y, m, b, j, vx, vup, sp, cp, hs, hc)
             ia = a0 + 2 * (b * nst + j)
             fup, ffwd, mea, d1, d2 = station_aero(ut, up, theta, thd, m.st[j, S_C], m.st[j, S_XEA],
                                                   m.st[j, S_XAC], m.st[j, S_A], y[ia], y[ia + 1], theo,
