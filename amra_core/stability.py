@@ -146,7 +146,8 @@ def averaged_jacobian(model: CompiledModel, y0: np.ndarray, period_s: float, n_p
     (the constant-coefficient approximation of the periodic system)."""
     y = y0.copy()
     hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, len(y)))
-    steps = 16
+    dt_max = stable_time_step(model, 1.3 * float(y0[Y_OMEGA]))
+    steps = max(int(math.ceil(period_s / n_points / dt_max)), 4)  # an explicit step within its limit
     J = np.zeros((len(y) - 1, len(y) - 1))
     for _ in range(n_points):
         J += jacobian(model, y) / n_points

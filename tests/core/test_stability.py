@@ -42,3 +42,12 @@ def test_nominal_mccutcheon_linearly_stable(mu):
     teeter = [m for m in res.modes if m.label == "teeter"]
     omega_hz = res.trim.omega_rad_s / (2 * 3.141592653589793)
     assert min(abs(m.frequency_hz - omega_hz) for m in teeter) < 0.05 * omega_hz
+
+
+def test_fem_coupled_forward_cell_is_not_a_numerical_failure():
+    """Regression: the averaged Jacobian used to unfold Floquet exponents was marched with a
+    step above the fem-coupled explicit limit and turned NaN (the cell was recorded 'failed')."""
+    rotor = _paper_rotor(3000.0, 0.48)
+    cell = assess_cell(rotor, FlightCondition(mu=0.1), SolverSettings(fidelity="fem-coupled"))
+    print(f"\nfem-coupled mu 0.1 GJ 3000 CG 0.48: {cell.verdict} ({cell.reason})")
+    assert cell.verdict != "failed"
