@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from amra_core.cli import main
+from cli_helpers import run_cli, strict_json
 from amra_core.kernels import HISTORY_COLUMNS
 
 G = 9.80665
@@ -22,26 +23,11 @@ RADIUS_M = 3.81
 UNIT_SUFFIX = re.compile(r"_(s|rad|rad_s|m|m_s|n|nm|hz|per_s|kg|kg_m|nm2)$")
 
 
-def _strict_json(text: str):
-    def bad(tok):
-        raise ValueError(f"non-standard JSON constant {tok}")
-    return json.loads(text, parse_constant=bad)
-
-
-def run_cli(capsys, *argv):
-    try:
-        rc = main(list(argv))
-    except SystemExit as exc:
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
 def cli_json(capsys, *argv) -> dict:
     rc, out, err = run_cli(capsys, *argv, "--json")
     assert rc == 0, err
     assert "Traceback" not in err
-    return _strict_json(out)
+    return strict_json(out)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -109,7 +95,7 @@ def simulate_run(tmp_path_factory):
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
         rc = main(["simulate", "--preset", "mccutcheon", "--t-end", "1", "--json", "--quiet", "--out", str(path)])
     assert rc == 0, err.getvalue()
-    return _strict_json(out.getvalue()), path
+    return strict_json(out.getvalue()), path
 
 
 def test_simulate_json_keys(simulate_run):

@@ -27,11 +27,6 @@ def uniform_rotor(gj=150.0, x_ea=0.3, x_cg=0.3):
                  stations=st)
 
 
-@pytest.fixture(scope="module")
-def mccutcheon():
-    return load_preset("mccutcheon")
-
-
 # ---------------------------------------------------------------------------------------------
 # natural modes and labels
 # ---------------------------------------------------------------------------------------------

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from amra_core.cli import main
+from cli_helpers import run_cli, strict_json
 
 REPO = Path(__file__).resolve().parents[2]
 PRESETS = REPO / "assets" / "rotors"
@@ -24,27 +24,10 @@ STATION_KEYS = ("r_m", "mass_kg_m", "torsional_inertia_kg_m", "gj_nm2", "ei_flap
 TOP_KEYS = ("radius_m", "root_cutout_m", "chord_m", "n_blades", "incidence_rad", "vehicle_mass_kg")
 
 
-def _strict_json(text: str):
-    """Parse JSON, refusing the non-standard NaN/Infinity tokens Python would otherwise accept."""
-    def bad(tok):
-        raise ValueError(f"non-standard JSON constant {tok}")
-    return json.loads(text, parse_constant=bad)
-
-
-def run_cli(capsys, *argv):
-    """``amra *argv`` in-process: (exit code, stdout, stderr). argparse errors exit via SystemExit."""
-    try:
-        rc = main(list(argv))
-    except SystemExit as exc:
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
-
-
 def rotor_json(capsys, *argv) -> dict:
     rc, out, err = run_cli(capsys, "rotor", *argv, "--json")
     assert rc == 0, err
-    return _strict_json(out)
+    return strict_json(out)
 
 
 def expected_from_toml(path: Path) -> dict:
@@ -284,7 +267,7 @@ def test_console_script_end_to_end(tmp_path):
     ok = subprocess.run([exe, "rotor", "--preset", "mccutcheon", "--json"], capture_output=True, text=True,
                         env=env, timeout=120, cwd=tmp_path)
     assert ok.returncode == 0, ok.stderr
-    got = _strict_json(ok.stdout)
+    got = strict_json(ok.stdout)
     assert got["radius_m"] == pytest.approx(3.81) and got["vehicle_mass_kg"] == pytest.approx(360.0)
     assert len(got["stations"]["r_m"]) == len(got["stations"]["gj_nm2"]) >= 2
 

@@ -25,16 +25,6 @@ REPO = Path(__file__).resolve().parents[2]
 T = COL["t_s"]
 
 
-@pytest.fixture(scope="module")
-def mccutcheon():
-    return load_preset("mccutcheon")
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_preset("paper-boundary")
-
-
 _TRIMS = {}
 
 

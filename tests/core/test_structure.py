@@ -18,17 +18,8 @@ from amra_core.rotor import BladeStations, PointMass, Rotor
 from amra_core.rotor_io import load_preset
 from amra_core.shapes import make_mesh
 from amra_core.structure import assemble, blade_matrices
+from amra_core.validation.structure import BETA_L, ROTATING_TABLE  # physics-reference §4.1-4.2
 
-#: roots of cos(x) cosh(x) = -1 (physics-reference §4.1, here to 10 digits)
-BETA_L = np.array([1.8751040687, 4.6940911330, 7.8547574382])
-#: physics-reference §4.2: omega sqrt(m L^4 / EI) of the rotating uniform cantilever, no hub offset
-ROTATING_TABLE = {
-    0: (3.5160, 22.0345, 61.6972),
-    3: (4.7973, 23.3203, 62.9850),
-    6: (7.3604, 26.8091, 66.6839),
-    9: (10.2257, 31.7705, 72.3867),
-    12: (13.1702, 37.6031, 79.6145),
-}
 
 # uniform test blade (SI): chosen round numbers, not a real blade
 M_KG_M, I_KG_M, GJ, EI, EI_LAG = 3.0, 0.01, 1500.0, 1200.0, 9.0e4

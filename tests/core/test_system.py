@@ -35,16 +35,6 @@ AXIAL = FlightCondition()
 FORWARD = FlightCondition(mu=0.1)
 
 
-@pytest.fixture(scope="module")
-def mccutcheon():
-    return load_preset("mccutcheon")
-
-
-@pytest.fixture(scope="module")
-def paper():
-    return load_preset("paper-boundary")
-
-
 def _flight_id(fl):
     return "axial" if fl.is_axial else f"mu{fl.mu}"
 

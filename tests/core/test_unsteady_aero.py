@@ -232,11 +232,6 @@ def test_indicial_lift_follows_wagner(airfoil):
 # ---------------------------------------------------------------------------------------------
 # trims: Theodorsen and quasi-steady agree in steady flight
 # ---------------------------------------------------------------------------------------------
-@pytest.fixture(scope="module")
-def mccutcheon():
-    return load_preset("mccutcheon")
-
-
 @pytest.mark.parametrize("fidelity", ["rigid", "fem-coupled"])
 def test_axial_trim_theodorsen_equals_quasi_steady(mccutcheon, fidelity):
     res = {}
