@@ -11,8 +11,8 @@ import time
 
 
 def cmd_validate(args) -> int:
-    from .validation import run_validation
-    from .validation.report import summary_text
+    from ..validation import run_validation
+    from ..validation.report import summary_text
     t0 = time.perf_counter()
 
     def progress(msg: str) -> None:

@@ -11,46 +11,18 @@ its allowed range. Ctrl-C returns the partial map (exit 130).
 """
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import sys
 import threading
 
-from .flight import AERO_MODELS
-from .shapes import FIDELITIES
-
-
-def _range(name, lo, hi, with_count):
-    form = "A:B:N" if with_count else "A:B"
-
-    def parse(text):
-        parts = text.split(":")
-        if len(parts) != (3 if with_count else 2):
-            raise argparse.ArgumentTypeError(f"{name} = {text!r} is not allowed: give {form}")
-        try:
-            a, b = float(parts[0]), float(parts[1])
-            n = int(parts[2]) if with_count else None
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r} is not allowed: give {form} with numbers") from None
-        for v in (a, b):
-            if not math.isfinite(v) or not lo <= v <= hi:
-                raise argparse.ArgumentTypeError(f"{name} = {text!r} is out of range: A and B must lie in [{lo}, {hi}]")
-        if with_count:
-            if not 1 <= n <= 200:
-                raise argparse.ArgumentTypeError(f"{name} = {text!r} is out of range: N must be an integer in [1, 200]")
-            if n > 1 and not b > a:
-                raise argparse.ArgumentTypeError(f"{name} = {text!r} is not allowed: B must exceed A")
-            return (a, b, n)
-        if not b > a:
-            raise argparse.ArgumentTypeError(f"{name} = {text!r} is not allowed: B must exceed A")
-        return (a, b)
-    return parse
+from ..flight import AERO_MODELS
+from ..shapes import FIDELITIES
+from .common import number, value_range
 
 
 def register(sub) -> None:
     """Add the ``boundary`` sub-command to the ``amra`` parser's sub-parsers ``sub``."""
-    from .cli import _number
     p = sub.add_parser("boundary", help="stability boundary map over CG x GJ (paper Fig. 14)",
                        description="Stability boundary map over CG x GJ: coarse grid, then bisection in log GJ "
                                    "per CG column until each transition is bracketed to --tol.")
@@ -59,21 +31,21 @@ def register(sub) -> None:
     g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
     p.add_argument("--fidelity", choices=FIDELITIES, default="rigid")
     p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
-    p.add_argument("--mu", type=_number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
-    p.add_argument("--ea", type=_number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
-    p.add_argument("--cg", type=_range("--cg", 0.0, 1.0, True), default=(0.20, 0.50, 16),
+    p.add_argument("--mu", type=number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
+    p.add_argument("--ea", type=number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
+    p.add_argument("--cg", type=value_range("--cg", 0.0, 1.0, True), default=(0.20, 0.50, 16),
                    help="CG columns A:B:N [chord fraction] (default 0.20:0.50:16)")
-    p.add_argument("--gj", type=_range("--gj", 1.0, 1e6, False), default=(30.0, 3000.0),
+    p.add_argument("--gj", type=value_range("--gj", 1.0, 1e6, False), default=(30.0, 3000.0),
                    help="GJ range A:B [N m^2/rad], log scale (default 30:3000)")
-    p.add_argument("--tol", type=_number("--tol", 1e-4, 1.0), default=0.02,
+    p.add_argument("--tol", type=number("--tol", 1e-4, 1.0), default=0.02,
                    help="relative GJ bracket width at which bisection stops (default 0.02)")
-    p.add_argument("--coarse", type=_number("--coarse", 2, 200, integer=True), default=7,
+    p.add_argument("--coarse", type=number("--coarse", 2, 200, integer=True), default=7,
                    help="GJ values of the coarse grid (default 7)")
     p.add_argument("--method", choices=("eigen", "time"), default="eigen",
                    help="eigen: linearised about trim; time: time marching from trim plus a kick")
-    p.add_argument("--elements", type=_number("--elements", 1, 60, integer=True), default=10,
+    p.add_argument("--elements", type=number("--elements", 1, 60, integer=True), default=10,
                    help="FEM elements per blade")
-    p.add_argument("--workers", type=_number("--workers", 1, 512, integer=True),
+    p.add_argument("--workers", type=number("--workers", 1, 512, integer=True),
                    help="local worker processes (default: the CPU count; 1 = in this process)")
     p.add_argument("--scheduler", metavar="ADDR", help="dask.distributed scheduler address (tcp://host:8786)")
     p.add_argument("--store", metavar="FILE", help="SQLite result store: reuse and keep finished cells")
@@ -86,13 +58,13 @@ def register(sub) -> None:
 
 def _spec(args):
     import numpy as np
-    from .boundary import MapSpec
-    from .rotor_io import load_rotor_file
+    from ..boundary import MapSpec
+    from ..rotor_io import load_rotor_file
     a, b, n = args.cg
     cgs = tuple(float(x) for x in np.linspace(a, b, n)) if n > 1 else (a,)
     rotor = load_rotor_file(args.rotor) if args.rotor else (args.preset or "paper-boundary")
     if isinstance(rotor, str):
-        from .rotor_io import load_preset
+        from ..rotor_io import load_preset
         load_preset(rotor)  # a bad preset name fails here, naming the choices
     return MapSpec(rotor=rotor, fidelity=args.fidelity, aero=args.aero, mu=args.mu, ea=args.ea, cg_values=cgs,
                    gj_min=args.gj[0], gj_max=args.gj[1], gj_rel_tol=args.tol, n_coarse=args.coarse,
@@ -100,15 +72,15 @@ def _spec(args):
 
 
 def cmd_boundary(args) -> int:
-    from .boundary import iter_map, solver_fingerprint
-    from .executor import make_executor
+    from ..boundary import iter_map, solver_fingerprint
+    from ..executor import make_executor
     spec = _spec(args)
     if args.scheduler and args.workers:
         raise ValueError("--workers and --scheduler are both given: the dask cluster sets its own workers")
     store = None
     if args.store:
         import warnings
-        from .store import CellStore, StoreWarning
+        from ..store import CellStore, StoreWarning
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", StoreWarning)
             store = CellStore(args.store, solver=solver_fingerprint())
@@ -146,7 +118,7 @@ def cmd_boundary(args) -> int:
         bmap.to_csv(args.out)
         out["csv"] = args.out
     if args.plot:
-        from .map_plot import PAPER_AXIAL_POINTS, plot_map
+        from ..map_plot import PAPER_AXIAL_POINTS, plot_map
         marks = PAPER_AXIAL_POINTS.get(spec.fidelity, []) if spec.mu == 0 and abs(spec.ea - 0.32) < 1e-9 else []
         plot_map(bmap, args.plot, marks=marks)
         out["plot"] = args.plot

@@ -1,0 +1,40 @@
+"""``amra`` command line: one module per sub-command, shared argument helpers in :mod:`.common`.
+
+Bad input exits with code 2 and a one-line message naming the parameter and its allowed range;
+never a traceback. Long runs show progress on stderr when it is a terminal.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import __version__
+from ..flight import SettingsError
+from ..rotor import RotorError
+from . import bench, boundary, modes, rotor, serve, simulate, stability, trim, validate
+from .common import UsageError
+
+COMMANDS = (rotor, modes, trim, simulate, stability, bench, serve, boundary, validate)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(prog="amra", description="Aeroelastic model of a rotor in autorotation")
+    ap.add_argument("--version", action="version", version=f"amra {__version__}")
+    sub = ap.add_subparsers(dest="command", required=True)
+    for command in COMMANDS:
+        command.register(sub)
+    return ap
+
+
+def main(argv=None) -> int:
+    ap = build_parser()
+    args = ap.parse_args(argv)
+    try:
+        rc = args.func(args)
+    except (RotorError, SettingsError, UsageError, ValueError) as exc:
+        print(f"amra {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    return rc or 0

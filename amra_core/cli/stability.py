@@ -1,0 +1,35 @@
+"""``amra stability``: eigenvalues (axial) or Floquet exponents (forward) about trim."""
+from __future__ import annotations
+
+import json
+
+from ..flight import AERO_MODELS, SolverSettings
+from .common import flight, flight_args, jsonable, load_rotor, rotor_args
+
+
+def cmd_stability(args):
+    from ..model import compile_model
+    from ..stability import analyse
+    settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, n_elements=args.elements)
+    res = analyse(compile_model(load_rotor(args), flight(args), settings))
+    out = res.to_dict(include_aero_lag=args.all_modes)
+    if not res.trim.ok:
+        out["reason"] = res.trim.reason
+    if args.json:
+        print(json.dumps(out, indent=2, default=jsonable))
+    else:
+        print(f"stable: {out['stable']}  ({out['method']}; trim {res.trim.status})")
+        print(f"{'mode':14s} {'f [Hz]':>9s} {'zeta [-]':>9s} {'Re [1/s]':>10s}")
+        for m in out["modes"]:
+            print(f"{m['label']:14s} {m['frequency_hz']:9.3f} {m['damping_ratio']:9.4f} {m['real_part_per_s']:10.4f}")
+    return 0
+
+
+def register(sub) -> None:
+    p = sub.add_parser("stability", help="eigenvalues (axial) or Floquet exponents (forward) about trim")
+    rotor_args(p)
+    flight_args(p)
+    p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
+    p.add_argument("--all-modes", action="store_true", help="also list the aerodynamic lag modes")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(func=cmd_stability)
