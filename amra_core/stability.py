@@ -199,20 +199,23 @@ def analyse(model: CompiledModel, trim_result: Optional[TrimResult] = None) -> S
 class CellResult:
     cg: float
     gj_nm2: float
-    verdict: str  #: stable | flutter | divergence | overspeed | no-autorotation | failed
+    verdict: str  #: stable | flutter | divergence | overspeed | no-autorotation | windmill-brake | failed
     stable: bool
-    boundary_kind: str  #: 'flutter' (eigenvalue crossing on the branch), 'fold' (no trim), '' if stable
+    #: 'flutter' (eigenvalue crossing on the branch), 'fold' (no trim), 'windmill-brake', '' if stable
+    boundary_kind: str
     growth_rate_per_s: Optional[float]
     frequency_hz: Optional[float]
     omega_trim_rad_s: Optional[float]
     reason: str = ""
+    branch: str = ""  #: trim branch: normal | windmill-brake | none ('' when not known)
+    descent_rate_m_s: Optional[float] = None  #: of the equilibrium [m/s], None without one
 
     def to_dict(self) -> dict:
         return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict) -> "CellResult":
-        return cls(**{k: d.get(k) for k in cls.__dataclass_fields__})
+        return cls(**{k: d[k] for k in cls.__dataclass_fields__ if k in d})
 
 
 def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings, method: str = "eigen") -> CellResult:
@@ -231,12 +234,18 @@ def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
         be = res.trim.branch_end
         why = res.trim.reason + (f" (branch ended at mean GJ {be['gj_mean_nm2']:.0f} N m^2/rad)" if be else "")
         verdict = "overspeed" if be.get("runaway") == "overspeed" else "no-autorotation"
-        return CellResult(cg, gj, verdict, False, "fold", None, None, None, why)
-    crit = res.critical
-    if res.stable:
+        return CellResult(cg, gj, verdict, False, "fold", None, None, None, why, "none")
+    return cell_from_modes(cg, gj, res.trim, res.modes)
+
+
+def cell_from_modes(cg: float, gj: float, tr: TrimResult, modes: list) -> CellResult:
+    """The cell of a normal-branch trim ``tr`` with its ``modes``."""
+    crit = max(modes, key=lambda m: m.real_part_per_s)
+    vd = float(tr.descent_rate_m_s)
+    if all(m.real_part_per_s < UNSTABLE_REAL_PART for m in modes):
         return CellResult(cg, gj, "stable", True, "", crit.real_part_per_s, crit.frequency_hz,
-                          res.trim.omega_rad_s, f"least damped: {crit.label}")
+                          tr.omega_rad_s, f"least damped: {crit.label}", "normal", vd)
     oscill = crit.frequency_hz >= MIN_FLUTTER_HZ
     verdict = "flutter" if oscill else "divergence"
     return CellResult(cg, gj, verdict, False, "flutter", crit.real_part_per_s, crit.frequency_hz,
-                      res.trim.omega_rad_s, f"unstable {crit.label} mode")
+                      tr.omega_rad_s, f"unstable {crit.label} mode", "normal", vd)

@@ -94,9 +94,11 @@ def _hover_induced(model: CompiledModel) -> float:
     return math.sqrt(r.vehicle_mass_kg * model.flight.gravity_m_s2 / (2 * model.flight.density_kg_m3 * r.disc_area_m2))
 
 
-#: an equilibrium descending faster than this many hover induced velocities (V_c/v_h < -2, beyond
-#: the turbulent-wake region of the empirical curve) is on the windmill-brake side, not autorotation
-WINDMILL_BRAKE_RATIO = 2.0
+#: an equilibrium descending faster than this many hover induced velocities is on the windmill-brake
+#: side, not autorotation: beyond the turbulent-wake region (V_c/v_h < -2) and its blend into momentum
+#: theory (``kernels.EMP_BLEND``), so a state inside the blend, where the inflow model is still the
+#: empirical curve's, is not labelled windmill-brake
+WINDMILL_BRAKE_RATIO = 2.0 + kernels.EMP_BLEND
 
 
 def branch_of(model: CompiledModel, descent_rate_m_s: float) -> str:
