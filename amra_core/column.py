@@ -33,6 +33,7 @@ import numpy as np
 
 from .flight import FlightCondition, SolverSettings
 from .model import CompiledModel, compile_model
+from .periodic_trim import PeriodicContinuation
 from .rotor import Rotor
 from .stability import UNSTABLE_REAL_PART, Mode, analyse
 from .trim import (TrimResult, _faster_branch, _plausible, _solve_at, continue_to, on_branch, trim, trim_axial,
@@ -115,10 +116,18 @@ class _Walker:
         self.n_probe = n_probe
         self.unresolved: set = set()  # GJ pairs whose bracket could not be narrowed
         self.top_omega: Optional[float] = None
+        self._models: dict = {}
+        self.periodic = PeriodicContinuation()
 
     # ---------------------------------------------------------------- models and points
     def model(self, gj: float) -> CompiledModel:
-        return compile_model(self.base.with_overrides(gj_nm2=gj), self.flight, self.settings)
+        """The compiled model at ``gj`` (kept for the step retries and bisection at the same GJ)."""
+        m = self._models.get(gj)
+        if m is None:
+            if len(self._models) > 8:
+                self._models.clear()
+            m = self._models[gj] = compile_model(self.base.with_overrides(gj_nm2=gj), self.flight, self.settings)
+        return m
 
     def _check_cancel(self):
         if self.cancel is not None and self.cancel.is_set():
@@ -152,6 +161,9 @@ class _Walker:
         """Trim at ``gj`` continued from ``a`` (secant through ``b``); None if it leaves the branch."""
         self._check_cancel()
         self.n_trims += 1
+        if not self.axial:  # periodic trim continued from a's orbit (Broyden-updated Jacobian)
+            tr = self.periodic.step(self.model(gj), a.trim)
+            return tr if on_branch(tr, a.trim, None if b is None else b.trim, s) else None
         tr = continue_to(self.model(gj), None, a.trim, None if b is None else b.trim, s)
         if on_branch(tr, a.trim, None if b is None else b.trim, s):
             return tr
@@ -222,8 +234,11 @@ class _Walker:
             tr = self.step(gj, prev, prev2, h / h_prev)
             if tr is None:
                 if h <= self.h_min * (1 + 1e-9):  # fold: no branch a rel_tol step further
-                    self.add(gj, None, "the trim branch ends (fold): no continuation from "
-                                       f"GJ {prev.gj_nm2:.1f} N m^2/rad")
+                    why = f"the trim branch ends (fold): no continuation from GJ {prev.gj_nm2:.1f} N m^2/rad"
+                    if not self.axial and self._sign(prev):
+                        why += (" (forward flight: the periodic orbit there is unstable, and a trim converged by "
+                                "marching cannot follow an unstable orbit far; the branch may go on)")
+                    self.add(gj, None, why)
                     return prev
                 h = max(h / 2, self.h_min)
                 continue
@@ -275,7 +290,14 @@ class _Walker:
 
     def probe(self, below: float, upper_fold: Optional[float], ref: Optional[BranchPoint] = None) -> None:
         """Cold-start probes on the coarse grid below ``below``; a normal-branch probe starts a
-        new segment walked up (to ``upper`` at most) and down."""
+        new segment walked up (to ``upper`` at most) and down. Forward flight: not probed (a cold
+        periodic trim costs as much as a whole column walk); the range below is ``fold``."""
+        if not self.axial:
+            if upper_fold is None and self.gj_max not in self.points:
+                self.add(self.gj_max, None, "no normal-branch trim at the stiffest blade of the range")
+            if self.gj_min not in self.points:
+                self.add(self.gj_min, None, "not probed below the fold in forward flight")
+            return
         grid = [g for g in np.geomspace(self.gj_min, self.gj_max, self.n_probe)[::-1] if g < below * (1 - 1e-9)]
         if upper_fold is None and not grid or (grid and grid[-1] > self.gj_min * (1 + 1e-9)):
             grid.append(self.gj_min)

@@ -169,11 +169,15 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
         return np.concatenate([out, dy[m.xd_slice()]])
 
     z0 = np.concatenate([[y0[Y_OMEGA]] if free_omega else [], [y0[Y_VD], y0[Y_V0]], y0[4:6], y0[xs]])
-    sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
-    y = unpack(sol.x)
-    res = np.abs(resid(sol.x))
+    y = _newton_axial(m, y0, free_omega)  # jitted Newton first; scipy's hybr where it does not converge
+    if y is not None:
+        ok = True
+    else:
+        sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
+        y = unpack(sol.x)
+        res = np.abs(resid(sol.x))
+        ok = sol.success or res.max() < 1e-6
     omega = y[Y_OMEGA]
-    ok = sol.success or res.max() < 1e-6
     # momentum theory's second windmill root (far wake flowing down) is unphysical and unstable
     windmill_unphysical = (-y[Y_VD] / vh < -2.0 - 0.1) and (-y[Y_VD] + 2 * y[Y_V0] > 0)
     if not ok or not (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) or windmill_unphysical \
@@ -186,6 +190,20 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
     tw = _tip_twist(model, y_full)
     return TrimResult("trimmed", y_full, omega, y[Y_VD], 0.0, 0.0, y[Y_V0], loads[L_THRUST], loads[L_TORQUE],
                       0.0, tw, model=model)
+
+
+def _newton_axial(m: CompiledModel, y0: np.ndarray, free_omega: bool) -> Optional[np.ndarray]:
+    """The axial trim by the jitted Newton of :mod:`amra_core.trim_kernels` from ``y0``, or None."""
+    from . import trim_kernels
+    xs, xds = m.x_slice(), m.xd_slice()
+    lead = [Y_OMEGA] if free_omega else []
+    iu = np.array(lead + [Y_VD, Y_V0, 4, 5] + list(range(xs.start, xs.stop)), dtype=np.int64)
+    ir = np.array(lead + [Y_VD, Y_V0, 6, 7] + list(range(xds.start, xds.stop)), dtype=np.int64)
+    y = np.ascontiguousarray(y0, dtype=np.float64).copy()
+    it, rn = trim_kernels.newton_axial(y, m.arrays, iu, ir, 1e-8, 40)
+    if it < 0 or not np.all(np.isfinite(y)):
+        return None
+    return y
 
 
 def _inflow_unstable(m: CompiledModel, y: np.ndarray) -> bool:
