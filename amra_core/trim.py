@@ -21,7 +21,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import root
 
-from . import kernels
+from . import kernel_guard, kernels
 from .model import (L_FHORIZ, L_FVERT, L_THRUST, L_TORQUE, N_Y_FIXED, CompiledModel, Y_OMEGA,
                     Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step, transfer_state)
 
@@ -133,7 +133,7 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
 
     def resid(z):
         y = unpack(z)
-        kernels.evaluate(y, a, dy, loads)
+        kernel_guard.evaluate(y, a, dy, loads)
         out = [dy[Y_OMEGA]] if free_omega else []
         out += [dy[Y_VD], dy[Y_V0], dy[6], dy[7]]
         return np.concatenate([out, dy[m.xd_slice()]])
@@ -150,9 +150,9 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
             or _inflow_unstable(m, y):
         return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
                           model=model)
-    kernels.evaluate(y, a, dy, loads)
+    kernel_guard.evaluate(y, a, dy, loads)
     y_full = y.copy()
-    kernels.steady_wagner_states(y_full, model.arrays)
+    kernel_guard.steady_wagner_states(y_full, model.arrays)
     tw = _tip_twist(model, y_full)
     return TrimResult("trimmed", y_full, omega, y[Y_VD], 0.0, 0.0, y[Y_V0], loads[L_THRUST], loads[L_TORQUE],
                       0.0, tw, model=model)
@@ -165,9 +165,9 @@ def _inflow_unstable(m: CompiledModel, y: np.ndarray) -> bool:
     h = 1e-4 * max(abs(y[Y_V0]), 1.0)
     dy = np.zeros(m.n_y); loads = np.zeros(8)
     yp = y.copy(); yp[Y_V0] += h
-    kernels.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
+    kernel_guard.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
     yp[Y_V0] -= 2 * h
-    kernels.evaluate(yp, m.arrays, dy, loads)
+    kernel_guard.evaluate(yp, m.arrays, dy, loads)
     return (up - dy[Y_V0]) / (2 * h) > 0.0
 
 
@@ -192,8 +192,8 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
     hist = np.zeros((steps_rev, kernels.N_HIST)); states = np.zeros((steps_rev, len(y)))
     if n_revs > 1:
         dummy_h = np.zeros((1, kernels.N_HIST)); dummy_s = np.zeros((1, len(y)))
-        kernels.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
-    done, rows, status = kernels.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
+        kernel_guard.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
+    done, rows, status = kernel_guard.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
     if status != 0:
         raise FloatingPointError("non-finite state while converging the periodic solution")
     from .model import L_FVERT as _  # noqa: F401  (layout documented in model)
