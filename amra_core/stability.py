@@ -162,7 +162,8 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "fo
     """One-revolution state transition (without psi); returns (Phi, T).
 
     ``scheme='forward'`` (default): one-sided differences against one unperturbed march (n + 1
-    marches of one revolution; exponents agree with central differences to ~1e-5 1/s, tested);
+    marches of one revolution, relative step 3e-6: the best balance of truncation and round-off
+    found; the least damped exponents agree with central differences to 2e-5 1/s, tested);
     ``'central'``: central differences (2 n marches)."""
     if scheme not in ("forward", "central"):
         raise ValueError(f"scheme = {scheme!r} is not allowed: choose 'forward' or 'central'")
@@ -177,7 +178,7 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "fo
         yb = y0.copy()
         kernel_guard.advance(yb, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
     for i in range(1, n):
-        h = 1e-6 * max(1.0, abs(y0[i]))
+        h = (3e-6 if scheme == "forward" else 1e-6) * max(1.0, abs(y0[i]))
         yp = y0.copy(); yp[i] += h
         kernel_guard.advance(yp, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
         if scheme == "forward":

@@ -16,9 +16,9 @@ import numpy as np
 
 #: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
 #: says which and how long a run is needed); neither stable nor unstable, never counted as either
-VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure",
+VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake", "numerical-failure",
             "undetermined")
-UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
+UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake")
 
 #: a perturbation growing faster than this [1/s] is unstable (|e^(0.02 * 10 s)| = 1.22 over a run)
 GROWTH_THRESHOLD_PER_S = 0.02
