@@ -162,8 +162,14 @@ class _Walker:
         self._check_cancel()
         self.n_trims += 1
         if not self.axial:  # periodic trim continued from a's orbit (Broyden-updated Jacobian)
+            tr = self.periodic.step(self.model(gj), a.trim, None if b is None else b.trim, s)
+            if on_branch(tr, a.trim, None if b is None else b.trim, s):
+                return tr
+            if b is None:
+                return None
+            self.n_trims += 1  # the secant may overshoot near a fold: one more try from a alone
             tr = self.periodic.step(self.model(gj), a.trim)
-            return tr if on_branch(tr, a.trim, None if b is None else b.trim, s) else None
+            return tr if on_branch(tr, a.trim, None, 0.0) else None
         tr = continue_to(self.model(gj), None, a.trim, None if b is None else b.trim, s)
         if on_branch(tr, a.trim, None if b is None else b.trim, s):
             return tr
