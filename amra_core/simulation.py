@@ -40,6 +40,15 @@ MAX_CHUNK_ROWS = 40_000
 TERMINAL_STATUSES = ("numerical-failure", "rotor-stopped", "overspeed-stop")
 
 
+def _positive(name: str, value, hi: float, why: str = "") -> float:
+    """A finite number of seconds in (0, hi], else a SettingsError naming it and the range."""
+    ok = not isinstance(value, bool) and isinstance(value, (int, float, np.integer, np.floating))
+    if not ok or not math.isfinite(value) or not 0.0 < value <= hi:
+        raise SettingsError(f"{name} = {value!r} is not allowed: must be a number of seconds in (0, {hi:.6g}]"
+                            + (f": {why}" if why else ""))
+    return float(value)
+
+
 @dataclass(frozen=True)
 class Perturbation:
     """Initial kick applied to the trimmed state: teeter angle [rad] and elastic twist of blade 0
@@ -71,9 +80,7 @@ class Case:
                            ("perturbation", Perturbation)):
             if not isinstance(getattr(self, name), kind):
                 raise SettingsError(f"{name} = {getattr(self, name)!r} is not allowed: must be a {kind.__name__}")
-        _num("t_end_s", self.t_end_s, 0.0, T_END_MAX_S)
-        if self.t_end_s <= 0.0:
-            raise SettingsError(f"t_end_s = {self.t_end_s!r} is not allowed: must lie in (0, {T_END_MAX_S:g}] s")
+        _positive("t_end_s", self.t_end_s, T_END_MAX_S)
 
     def to_dict(self) -> dict:
         return {"rotor": self.rotor.to_dict() | {"sources": None}, "flight": asdict(self.flight),
@@ -149,10 +156,7 @@ class Simulation:
                 raise SettingsError(f"n_steps = {n_steps!r} is not allowed: must lie in [1, {max_steps}]: {why}")
             n_steps = int(n_steps)
         elif span_s is not None:
-            span_max = MAX_CHUNK_ROWS * self.record_interval_s
-            _num("span_s", span_s, 0.0, None)
-            if not 0.0 < span_s <= span_max * (1 + 1e-9):
-                raise SettingsError(f"span_s = {span_s!r} is not allowed: must lie in (0, {span_max:g}] s: {why}")
+            _positive("span_s", span_s, MAX_CHUNK_ROWS * self.record_interval_s * (1 + 1e-9), why)
             n_steps = min(int(math.ceil(span_s / self.dt)), max_steps)
         else:
             n_steps = self.record_every
@@ -183,8 +187,8 @@ class Simulation:
             progress: Optional[Callable[[float, float], None]] = None) -> "Simulation":
         """March to ``t_end_s`` [s] (default ``case.t_end_s``) in chunks of ``chunk_s`` [s]; the status
         is then ``finished`` unless the run ended earlier (see :data:`TERMINAL_STATUSES`)."""
-        t_end = self.case.t_end_s if t_end_s is None else _num("t_end_s", t_end_s, 0.0, T_END_MAX_S)
-        chunk = _num("chunk_s", chunk_s, 1e-6, MAX_CHUNK_ROWS * self.record_interval_s)
+        t_end = self.case.t_end_s if t_end_s is None else _positive("t_end_s", t_end_s, T_END_MAX_S)
+        chunk = _positive("chunk_s", chunk_s, MAX_CHUNK_ROWS * self.record_interval_s)
         if self.status in TERMINAL_STATUSES:
             return self
         while self.t < t_end - 1e-9:
