@@ -2,7 +2,7 @@
 
 Deviation signals (normalised teeter, tip twists and rotor speed) are taken relative to the start
 (axial flight: the trim is constant) or to the same azimuth one revolution earlier (forward flight:
-the trim is periodic, so ``s(t) - s(t - T_rev)`` removes it and keeps any growing or decaying
+the trim is periodic, so ``s(psi) - s(psi - 2 pi)`` removes it and keeps any growing or decaying
 motion). Their envelope (the maximum per window of one revolution, or 0.2 s) is fitted by least
 squares in log scale: the slope is the growth rate [1/s].
 """
@@ -55,12 +55,18 @@ def _deviation(h: np.ndarray, cols: dict, axial: bool, omega_ref: float, ref_row
         ref = np.array([ref_row[cols[k]] for k in SIGNALS])
         ref[3] = ref[3] / omega_ref
         d = (sig - ref) / scale
-    else:
-        t_rev = 2 * math.pi / omega_ref
+    else:  # the same azimuth one revolution earlier (not a fixed period: the rotor speed may move)
+        psi = h[:, cols["azimuth_rad"]]
         d = np.full_like(sig, np.nan)
-        late = t >= t[0] + t_rev
-        for k in range(sig.shape[1]):
-            d[late, k] = (sig[late, k] - np.interp(t[late] - t_rev, t, sig[:, k])) / scale
+        late = psi >= psi[0] + 2 * math.pi
+        if np.all(np.diff(psi) > 0):
+            for k in range(sig.shape[1]):
+                d[late, k] = (sig[late, k] - np.interp(psi[late] - 2 * math.pi, psi, sig[:, k])) / scale
+        else:  # rotor speed not positive throughout: fall back to the trim's period
+            t_rev = 2 * math.pi / omega_ref
+            late = t >= t[0] + t_rev
+            for k in range(sig.shape[1]):
+                d[late, k] = (sig[late, k] - np.interp(t[late] - t_rev, t, sig[:, k])) / scale
     return np.sqrt(np.sum(d**2, axis=1)), d
 
 
@@ -98,6 +104,38 @@ def _dominant_frequency(t, d):
     return float(f[int(np.argmax(spec))])
 
 
+def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
+    """Where the rotor speed of a run that left its start ends up: ``("settled", first row index,
+    mean rotor speed)`` when the window-averaged rotor speed over the last third of the run (at
+    least 3 windows) trends by less than 1 % of its level and spans less than 4 %, the settled part
+    starting where the window means last came within 3 % of that level (at least 6 windows);
+    ``("falling", rate)`` when it is still falling faster than that [fraction of the level per s];
+    ``("moving", rate)`` otherwise (still rising, or not yet settled)."""
+    edges = np.arange(t[0], t[-1] + 1e-12, window)
+    starts, centres, means = [], [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = np.nonzero((t >= a) & (t < b))[0]
+        if len(sel):
+            starts.append(sel[0]); centres.append(0.5 * (a + b)); means.append(float(np.mean(om[sel])))
+    n_last = max(3, len(means) // 3)
+    if len(means) < 2 * n_last:
+        return ("moving", float("nan"))
+    last = np.array(means[-n_last:]); tc = np.array(centres[-n_last:])
+    level = float(last.mean())
+    if level <= 0:
+        return ("falling", float("nan"))
+    slope = float(np.polyfit(tc, last, 1)[0])
+    rate = slope / level
+    if abs(rate) * (tc[-1] - tc[0]) >= 0.01 or last.max() - last.min() >= 0.04 * level:
+        return ("falling" if rate * (tc[-1] - tc[0]) <= -0.01 else "moving", rate)
+    k = len(means) - 1
+    while k > 0 and abs(means[k - 1] - level) <= 0.03 * level:
+        k -= 1
+    if len(means) - k < 6:
+        return ("moving", rate)
+    return ("settled", int(starts[k]), level)
+
+
 def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: str,
           trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01) -> Verdict:
     """Classify a run. ``status`` is the Simulation's (running/numerical-failure/rotor-stopped/
@@ -132,11 +170,30 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
         return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
     if not trimmed:
         drift = (om[0] - om[-1]) / omega_ref
+        state = _settle_state(t, om, window) if abs(drift) > 0.05 else ("none",)
+        if state[0] == "settled":  # autorotation at another rotor speed: judge the motion there
+            _, i0, om_s = state
+            sub = h[i0:]
+            ref = np.median(sub, axis=0)  # axial: deviations about the settled state
+            v = judge(sub, columns, om_s, axial, status, True, ref, perturbation_scale)
+            if v.verdict == "undetermined":
+                v.verdict = "no-autorotation"
+            v.explanation = (f"no steady autorotation on the trim branch; the rotor speed settled "
+                             f"{100 * abs(drift):.0f} % {'below' if drift > 0 else 'above'} the branch end, at "
+                             f"{om_s:.2f} rad/s from t = {t[i0]:.1f} s (descent rate "
+                             f"{np.mean(sub[:, cols['descent_rate_m_s']]):.1f} m/s): there " + v.explanation)
+            v.collapse_time_s = collapse
+            return v
         if growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill:
             return Verdict("flutter", growth, freq, collapse, amp_end, "growing coupled oscillation (no trim exists)")
+        if state[0] == "moving":
+            return Verdict("undetermined", growth, freq, collapse, amp_end,
+                           f"the rotor speed moved {100 * abs(drift):.0f} % from the branch end and had not settled "
+                           f"by t = {t[-1]:.1f} s: run longer to see where it settles")
         if drift > 0.05:
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
-                           f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end")
+                           f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end "
+                           f"and was still falling at the end of the run")
     if growth is None:
         window_s = max(2 * math.pi / omega_ref, 0.1)
         need = (3 * window_s + (0.0 if axial else 2 * math.pi / omega_ref))
