@@ -270,8 +270,10 @@ class Simulation:
             return Verdict("undetermined", None, None, None,
                            explanation="no data yet: call advance() or run() before asking for a verdict")
         scale = max(abs(self.case.perturbation.teeter_rad), abs(self.case.perturbation.twist_rad), 1e-4)
-        return judge(self.history, HISTORY_COLUMNS, self.omega_ref, self.case.flight.is_axial, self.status,
-                     self.trim.ok, self.reference_row, scale)
+        r, fl = self.case.rotor, self.case.flight
+        v_h = math.sqrt(r.vehicle_mass_kg * fl.gravity_m_s2 / (2 * fl.density_kg_m3 * r.disc_area_m2))
+        return judge(self.history, HISTORY_COLUMNS, self.omega_ref, fl.is_axial, self.status,
+                     self.trim.ok, self.reference_row, scale, hover_induced_m_s=v_h)
 
     def _row(self, y: np.ndarray) -> np.ndarray:
         row = np.zeros(len(HISTORY_COLUMNS)); loads = np.zeros(8); dy = np.zeros_like(y)

@@ -5,6 +5,12 @@ Deviation signals (normalised teeter, tip twists and rotor speed) are taken rela
 the trim is periodic, so ``s(psi) - s(psi - 2 pi)`` removes it and keeps any growing or decaying
 motion). Their envelope (the maximum per window of one revolution, or 0.2 s) is fitted by least
 squares in log scale: the slope is the growth rate [1/s].
+
+Runs without a trim (started from a branch end, model-notes §7) are judged by where the rotor goes:
+into the windmill-brake state (descent beyond 2 v_h) or still falling at the end: ``no-autorotation``;
+settled at another rotor speed: the motion after it settled is judged as a trimmed run's would be
+(the explanation says where it settled); still moving otherwise: ``undetermined`` (run longer).
+No data, or too little for the envelope fit: ``undetermined`` with the reason, never ``stable``.
 """
 from __future__ import annotations
 
@@ -16,14 +22,20 @@ import numpy as np
 
 #: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
 #: says which and how long a run is needed); neither stable nor unstable, never counted as either
+#: ``windmill-brake``: the run starts and stays on the windmill-brake side (descent rate beyond the
+#: turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8 §2);
+#: a run that starts in normal autorotation and ends there is ``no-autorotation``
 VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure",
-            "undetermined")
+            "undetermined", "windmill-brake")
 UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
 
 #: a perturbation growing faster than this [1/s] is unstable (|e^(0.02 * 10 s)| = 1.22 over a run)
 GROWTH_THRESHOLD_PER_S = 0.02
 #: oscillation frequencies below this [Hz] count as monotonic (divergence), not flutter
 MIN_FLUTTER_HZ = 0.3
+#: descent ratio V_c / v_h below which the rotor is in the windmill-brake state (the end of the
+#: turbulent-wake region of the empirical inflow curve, :data:`amra_core.kernels.EMP_K`)
+WINDMILL_BRAKE_RATIO = -2.0
 
 
 @dataclass
@@ -137,10 +149,12 @@ def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
 
 
 def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: str,
-          trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01) -> Verdict:
-    """Classify a run. ``status`` is the Simulation's (running/numerical-failure/rotor-stopped/
-    overspeed-stop); ``trimmed`` says whether a steady autorotation existed for the parameters;
-    ``ref_row`` is the history row of the unperturbed starting state."""
+          trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01,
+          hover_induced_m_s: Optional[float] = None) -> Verdict:
+    """Classify a run. ``status`` is the Simulation's (running/finished/numerical-failure/
+    rotor-stopped/overspeed-stop); ``trimmed`` says whether a steady autorotation existed for the
+    parameters; ``ref_row`` is the history row of the unperturbed starting state;
+    ``hover_induced_m_s`` (v_h [m/s]) enables the windmill-brake checks (descent beyond 2 v_h)."""
     cols = {c: i for i, c in enumerate(columns)}
     h = history
     if len(h) == 0:
@@ -168,6 +182,23 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            "no torque equilibrium exists: the rotor speed decayed from the start")
         return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
+    if hover_induced_m_s and len(t) >= 2 and collapse is None and status != "rotor-stopped":
+        vd = h[:, cols["descent_rate_m_s"]]
+        tail = vd[t >= t[-1] - window]
+        x_end = -float(np.mean(tail)) / hover_induced_m_s
+        x_start = -float(vd[0]) / hover_induced_m_s
+        if x_end < WINDMILL_BRAKE_RATIO:
+            if x_start < WINDMILL_BRAKE_RATIO:
+                return Verdict("windmill-brake", growth, freq, None, amp_end,
+                               f"the rotor started and stayed in the windmill-brake state: descent rate "
+                               f"{np.mean(tail):.1f} m/s = {-x_end:.1f} v_h (beyond the turbulent-wake region, "
+                               f"V_c/v_h < {WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
+            if not trimmed:  # a trimmed run that ends there is judged by its instability below
+                return Verdict("no-autorotation", growth, freq, None, amp_end,
+                               f"normal autorotation was lost: the descent rate rose from {vd[0]:.1f} to "
+                               f"{np.mean(tail):.1f} m/s = {-x_end:.1f} v_h, the windmill-brake state (V_c/v_h < "
+                               f"{WINDMILL_BRAKE_RATIO:g}), while the rotor speed went from {om[0]:.1f} to "
+                               f"{om[-1]:.1f} rad/s")
     if not trimmed:
         drift = (om[0] - om[-1]) / omega_ref
         state = _settle_state(t, om, window) if abs(drift) > 0.05 else ("none",)
@@ -175,7 +206,7 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             _, i0, om_s = state
             sub = h[i0:]
             ref = np.median(sub, axis=0)  # axial: deviations about the settled state
-            v = judge(sub, columns, om_s, axial, status, True, ref, perturbation_scale)
+            v = judge(sub, columns, om_s, axial, status, True, ref, perturbation_scale, hover_induced_m_s)
             if v.verdict == "undetermined":
                 v.verdict = "no-autorotation"
             v.explanation = (f"no steady autorotation on the trim branch; the rotor speed settled "
