@@ -82,6 +82,8 @@ def _os_reason(exc: OSError) -> str:
         return "a name that is too long for the file system"
     if exc.errno in (errno.EACCES, errno.EPERM):
         return "not accessible (permission denied)"
+    if exc.errno == errno.ENOTDIR:
+        return "a path through something that is not a folder"
     return exc.strerror or str(exc)
 
 
@@ -125,6 +127,17 @@ def inspect_store_path(path) -> tuple[str, str]:
                          f"(not an SQLite database); it was left untouched -- choose another path")
     app_id = int.from_bytes(head[68:72], "big")
     version = int.from_bytes(head[60:64], "big")
+    if app_id != APPLICATION_ID and os.path.exists(p + "-wal"):
+        # page 1 may live in the write-ahead log still (a writer killed before its first checkpoint)
+        try:
+            conn = sqlite3.connect(f"{Path(p).resolve().as_uri()}?mode=ro", uri=True, timeout=5)
+            try:
+                app_id = conn.execute("PRAGMA application_id").fetchone()[0]
+                version = conn.execute("PRAGMA user_version").fetchone()[0]
+            finally:
+                conn.close()
+        except sqlite3.Error:
+            pass
     if app_id != APPLICATION_ID:
         raise StoreError(f"--store {p!r} is not allowed: it is an SQLite database of another program "
                          f"(application_id {app_id:#x}); it was left untouched -- choose another path")
@@ -262,6 +275,19 @@ class CellStore:
 
     @staticmethod
     def _init_schema(conn: sqlite3.Connection, upgrade_from: Optional[int] = None) -> None:
+        # a new file gets its application_id in the main file's header first (rollback journal), so
+        # it is recognised as ours even if this process is killed before WAL's first checkpoint
+        mode = conn.execute("PRAGMA journal_mode").fetchone()[0]
+        if mode.lower() != "wal":
+            conn.execute("BEGIN IMMEDIATE")
+            try:
+                if conn.execute("PRAGMA application_id").fetchone()[0] == 0:
+                    conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+                    conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
+                conn.execute("COMMIT")
+            except BaseException:
+                conn.execute("ROLLBACK")
+                raise
         conn.execute("PRAGMA journal_mode = WAL")
         conn.execute("PRAGMA synchronous = NORMAL")
         conn.execute("BEGIN IMMEDIATE")
