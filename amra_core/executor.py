@@ -236,7 +236,7 @@ class LocalPoolExecutor(CellExecutor):
         while self._futures:
             left = None if t_end is None else max(0.0, t_end - time.monotonic())
             done, _ = cf.wait(list(self._futures), timeout=left, return_when=cf.FIRST_COMPLETED)
-            out, retry = [], []
+            out, retry, broken = [], [], False
             for fut in done:
                 item = self._futures.pop(fut)
                 if fut.cancelled():
@@ -245,6 +245,7 @@ class LocalPoolExecutor(CellExecutor):
                 if exc is None:
                     out.append(Outcome(item[2], True, fut.result()))
                 elif _is_worker_death(exc):
+                    broken = True
                     item[3] += 1
                     if item[3] > self.max_retries:
                         out.append(Outcome(item[2], False, WorkerDied(
@@ -254,7 +255,7 @@ class LocalPoolExecutor(CellExecutor):
                         retry.append(item)
                 else:
                     out.append(Outcome(item[2], False, exc))
-            if retry:
+            if broken:
                 # the broken pool fails every call it holds: collect them, then one fresh pool for all
                 for fut in list(self._futures):
                     if fut.done() and fut.exception() is not None and _is_worker_death(fut.exception()):
