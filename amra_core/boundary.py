@@ -156,7 +156,7 @@ class MapSpec:
         """The rotor with the map's uniform EA (CG and GJ are set per cell)."""
         from .rotor_io import load_preset
         r = load_preset(self.rotor) if isinstance(self.rotor, str) else self.rotor
-        return r.with_overrides(x_ea=self.ea)
+        return r.with_overrides(x_ea=self.ea, x_cg=self.cg_values[0])  # a valid section; cells set their CG
 
     @property
     def flight(self) -> FlightCondition:
@@ -446,7 +446,7 @@ class MapRun:
                         self.in_flight -= 1
                         role, cg, gj, key = out.tag
                         cell = out.value if out.ok else failed_cell(cg, gj, f"worker: {out.reason}")
-                        outcomes.append((role, cell, False, key))
+                        outcomes.append((role, cell, False, key if out.ok else None))  # no answer: never stored
                 else:
                     break
                 for role, cell, cached, key in outcomes:
@@ -455,7 +455,7 @@ class MapRun:
                     self.done += 1
                     if cached:
                         self.cached += 1
-                    elif self.store is not None:
+                    elif self.store is not None and key is not None:
                         self._put(key, spec.case_params(cg, cell.gj_nm2), cell)
                     if role[0] == "coarse":
                         pending_coarse[cg] -= 1
