@@ -155,7 +155,7 @@ class MapSpec:
         """The rotor with the map's uniform EA (CG and GJ are set per cell)."""
         from .rotor_io import load_preset
         r = load_preset(self.rotor) if isinstance(self.rotor, str) else self.rotor
-        return r.with_overrides(x_ea=self.ea)
+        return r.with_overrides(x_ea=self.ea, x_cg=self.cg_values[0])  # a valid section; cells set their CG
 
     @property
     def flight(self) -> FlightCondition:
