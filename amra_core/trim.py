@@ -94,11 +94,10 @@ def _hover_induced(model: CompiledModel) -> float:
     return math.sqrt(r.vehicle_mass_kg * model.flight.gravity_m_s2 / (2 * model.flight.density_kg_m3 * r.disc_area_m2))
 
 
-#: an equilibrium descending faster than this many hover induced velocities is on the windmill-brake
-#: side, not autorotation: beyond the turbulent-wake region (V_c/v_h < -2) and its blend into momentum
-#: theory (``kernels.EMP_BLEND``), so a state inside the blend, where the inflow model is still the
-#: empirical curve's, is not labelled windmill-brake
-WINDMILL_BRAKE_RATIO = 2.0 + kernels.EMP_BLEND
+#: an equilibrium descending faster than this many hover induced velocities (V_c/v_h < -2, beyond the
+#: turbulent-wake region of the empirical inflow curve) is on the windmill-brake side, not autorotation
+#: (the same limit as :data:`amra_core.verdict.WINDMILL_BRAKE_RATIO` for simulated runs)
+WINDMILL_BRAKE_RATIO = 2.0
 
 
 def branch_of(model: CompiledModel, descent_rate_m_s: float) -> str:
@@ -482,9 +481,11 @@ def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: Com
 
 def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
     """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
-    class, tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within
-    ``STEP_*`` of the secant prediction. A False here means: halve the step (or a fold)."""
-    if not _plausible(res, None) or res.branch != prev.branch:
+    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
+    the secant prediction. A False here means: halve the step (or a fold). The branch may move
+    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
+    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
+    if not _plausible(res, None):
         return False
     vh = _hover_induced(res.model)
     x1 = _trim_scalars(prev)
