@@ -171,24 +171,29 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
         return np.concatenate([out, dy[m.xd_slice()]])
 
     z0 = np.concatenate([[y0[Y_OMEGA]] if free_omega else [], [y0[Y_VD], y0[Y_V0]], y0[4:6], y0[xs]])
-    y = _newton_axial(m, y0, free_omega)  # jitted Newton first; scipy's hybr where it does not converge
-    if y is not None:
-        ok = True
-    elif not fallback:
-        return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
-                          model=model)
-    else:
+
+    def physical(y, ok):
+        if not ok:
+            return False
+        omega = y[Y_OMEGA]
+        # momentum theory's second windmill root (far wake flowing down) is unphysical and unstable
+        windmill_unphysical = (-y[Y_VD] / vh < -2.0 - 0.1) and (-y[Y_VD] + 2 * y[Y_V0] > 0)
+        return (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) and not windmill_unphysical \
+            and not _inflow_unstable(m, y)
+
+    # the jitted Newton first; scipy's hybr (``fallback``) where it does not converge or converges
+    # to a root off the physical branch (hybr, from the same start, may find the physical one)
+    y = _newton_axial(m, y0, free_omega)
+    good = y is not None and physical(y, True)
+    if not good and fallback:
         sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
         y = unpack(sol.x)
         res = np.abs(resid(sol.x))
-        ok = sol.success or res.max() < 1e-6
-    omega = y[Y_OMEGA]
-    # momentum theory's second windmill root (far wake flowing down) is unphysical and unstable
-    windmill_unphysical = (-y[Y_VD] / vh < -2.0 - 0.1) and (-y[Y_VD] + 2 * y[Y_V0] > 0)
-    if not ok or not (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) or windmill_unphysical \
-            or _inflow_unstable(m, y):
+        good = physical(y, sol.success or res.max() < 1e-6)
+    if not good:
         return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
                           model=model)
+    omega = y[Y_OMEGA]
     kernel_guard.evaluate(y, a, dy, loads)
     y_full = y.copy()
     kernel_guard.steady_wagner_states(y_full, model.arrays)
