@@ -24,10 +24,11 @@ import numpy as np
 #: says which and how long a run is needed); neither stable nor unstable, never counted as either
 #: ``windmill-brake``: an axial run starts and stays on the windmill-brake side (descent rate beyond
 #: the turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8
-#: §2); an untrimmed axial run that ends there is ``no-autorotation``
-VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure",
-            "undetermined", "windmill-brake")
-UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
+#: §2), so counted with the unstable verdicts; an untrimmed axial run that ends there is
+#: ``no-autorotation``
+VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake", "numerical-failure",
+            "undetermined")
+UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake")
 
 #: a perturbation growing faster than this [1/s] is unstable (|e^(0.02 * 10 s)| = 1.22 over a run)
 GROWTH_THRESHOLD_PER_S = 0.02
