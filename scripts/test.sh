@@ -13,6 +13,8 @@ source scripts/venv.sh
 
 need=()
 [[ -x /usr/bin/chromium ]] || need+=(chromium)
+command -v buildah >/dev/null || need+=(buildah)        # image tests: build and run the Dockerfile
+command -v debootstrap >/dev/null || need+=(debootstrap)  # image tests: the local base image
 if [[ ${#need[@]} -gt 0 ]]; then
     amra_apt "${need[@]}"
 fi
