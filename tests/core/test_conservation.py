@@ -25,7 +25,7 @@ import math
 import numpy as np
 import pytest
 
-from amra_core import kernels
+from amra_core import kernel_guard, kernels
 from amra_core.flight import FlightCondition, SolverSettings
 from amra_core.model import (P_IR, P_SLAG, Y_OMEGA, Y_ZETA0, Y_ZETAD0, angular_momentum, compile_model,
                              mechanical_energy, polar_inertia, stable_time_step)
@@ -87,7 +87,7 @@ def march(model, y0, dt_s, n_rev=N_REV, arrays=None):
     y = y0.copy()
     rows = n // 10 + 2
     hist = np.zeros((rows, kernels.N_HIST)); states = np.zeros((rows, model.n_y))
-    done, k, status = kernels.advance(y, 0.0, t_end / n, n, 10, arrays or model.arrays, hist, states, 1.0)
+    done, k, status = kernel_guard.advance(y, 0.0, t_end / n, n, 10, arrays or model.arrays, hist, states, 1.0)
     assert status == 0 and done == n
     return np.vstack([states[:k], y])
 
@@ -317,7 +317,7 @@ def test_static_twist_rigid_blade_hand_calculation(x_cg):
     model = compile_model(rot, FlightCondition(), SolverSettings(fidelity="rigid"), vacuum=True)
     y = np.zeros(model.n_y); y[Y_OMEGA] = W
     dy, loads = np.zeros(model.n_y), np.zeros(8)
-    kernels.evaluate(y, model.arrays, dy, loads)
+    kernel_guard.evaluate(y, model.arrays, dy, loads)
     scale = np.abs(dy[model.xd_slice()]).max()
     assert scale > 1.0  # the static loads act at zero deflection
     x = np.zeros(model.structure.n)
@@ -327,7 +327,7 @@ def test_static_twist_rigid_blade_hand_calculation(x_cg):
     s = model.structure
     lag = W**2 * r0 * m * e * L / (s.k_lag + W**2 * s.k2_lag)  # f_lag = r0 int m e dr
     y[Y_ZETA0:Y_ZETA0 + 2] = lag
-    kernels.evaluate(y, model.arrays, dy, loads)
+    kernel_guard.evaluate(y, model.arrays, dy, loads)
     assert np.abs(dy[model.xd_slice()]).max() <= 1e-10 * scale
     assert abs(dy[Y_OMEGA]) <= 1e-12 * W
     assert np.abs(dy[Y_ZETAD0:Y_ZETAD0 + 2]).max() <= 1e-10 * W**2 * abs(r0 * m * e * L) / s.I_lag + 1e-14
