@@ -204,14 +204,19 @@ def rhs(y, dy, m, loads, work):
             hforce += (-ffwd * sp - fup * wp * cp) * wgt
     # Structure and rotor speed from one Lagrangian (docs/model-equations.md):
     #   M x'' + g(x) Omega' = F_x = Q + Omega^2 f - (K0 + Omega^2 K2) x - C x'
-    #   J(x) Omega' + S (zeta0'' + zeta1'') + g^T x'' = torque - Omega J' - x'^T H x'
-    #   I_z zeta_b'' + S Omega' = lag moment + Omega^2 f_lag - (k_lag + Omega^2 k2_lag) zeta_b - c zeta_b'
-    # with J = I_R + 2 f^T x - x^T K2 x + 2 f_lag sum zeta - k2_lag |zeta|^2 and g = g0 + H x, by eliminating
-    # x'' and zeta'' (u = M^-1 g is kept in dy[x'] until Omega' is known).
+    #   J(x) Omega' + sum S_b zeta_b'' + g^T x'' = torque - Omega J' - x'^T H x' - sum S_b' zeta_b'
+    #   I_b zeta_b'' + S_b Omega' = lag moment + Omega^2 f_lag - (k_lag + Omega^2 k2_lag) zeta_b - c zeta_b'
+    #                               - Omega S_b' - I_b' zeta_b'
+    # with J = I_R + 2 f^T x - x^T K2 x + 2 f_lag sum zeta - k2_lag |zeta|^2, g = g0 + H x and the
+    # coned blade's lag coupling S_b(x) and inertia I_b(x) (plus their Coriolis forces on x),
+    # by eliminating x'' and zeta'' (u = M^-1 g is kept in dy[x'] until Omega' is known).
     om2 = om * om
+    z0 = y[Y_ZETA0]; z1 = y[Y_ZETA0 + 1]; zd0 = y[Y_ZETAD0]; zd1 = y[Y_ZETAD0 + 1]
     fx = 0.0; xk2x = 0.0; jdot = 0.0; xhx = 0.0; uf = 0.0; ug = 0.0
+    xs0x = 0.0; xs1x = 0.0; xs0xd = 0.0; xs1xd = 0.0; xi0x = 0.0; xi1x = 0.0; xi0xd = 0.0; xi1xd = 0.0
     for i in range(ns):
         k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
+        s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
         for k in range(ns):
             q = y[x0 + k]; qd = y[xd0 + k]
             k0x += m.k0[i, k] * q
@@ -220,7 +225,13 @@ def rhs(y, dy, m, loads, work):
             hx += m.gyh[i, k] * q
             hxd += m.gyh[i, k] * qd
             ux += m.ugyh[i, k] * q
-        f = work[i] + om2 * (m.sf[i] - k2x) - k0x - cxd
+            s0x += m.ls2[0, i, k] * q
+            s1x += m.ls2[1, i, k] * q
+            i0x += m.li2[0, i, k] * q
+            i1x += m.li2[1, i, k] * q
+        # flap-lag Coriolis: -d/dx of Omega S_b(x) zeta_b' + 1/2 I_b(x) zeta_b'^2
+        f = work[i] + om2 * (m.sf[i] - k2x) - k0x - cxd - om * (zd0 * s0x + zd1 * s1x) \
+            - zd0 * zd0 * i0x - zd1 * zd1 * i1x
         work[ns + i] = f
         qi = y[x0 + i]; qdi = y[xd0 + i]
         u = m.ugy0[i] + ux
@@ -231,26 +242,29 @@ def rhs(y, dy, m, loads, work):
         xhx += qdi * hxd
         uf += u * f
         ug += u * (m.gy0[i] + hx)
-    # rotor speed and lag
+        xs0x += qi * s0x; xs1x += qi * s1x; xs0xd += qdi * s0x; xs1xd += qdi * s1x
+        xi0x += qi * i0x; xi1x += qi * i1x; xi0xd += qdi * i0x; xi1xd += qdi * i1x
+    # rotor speed and lag: S_b = S - x^T S2_b x / 2, I_b = I_z - x^T I2_b x
     k2lag = p[P_K2LAG]
     klag = p[P_KLAG] + om2 * k2lag
     clag = p[P_CLAG]
-    z0 = y[Y_ZETA0]; z1 = y[Y_ZETA0 + 1]; zd0 = y[Y_ZETAD0]; zd1 = y[Y_ZETAD0 + 1]
+    sl0 = p[P_SLAG] - 0.5 * xs0x; sl1 = p[P_SLAG] - 0.5 * xs1x
+    il0 = p[P_ILAG] - xi0x; il1 = p[P_ILAG] - xi1x
     flag = om2 * p[P_FLAG]
-    f1 = lagm0 + flag - klag * z0 - clag * zd0
-    f2 = lagm1 + flag - klag * z1 - clag * zd1
-    ilag = p[P_ILAG]; slag = p[P_SLAG]
+    # with S_b' = -x^T S2_b x', I_b' = -2 x^T I2_b x'
+    f1 = lagm0 + flag - klag * z0 - clag * zd0 + om * xs0xd + 2.0 * xi0xd * zd0
+    f2 = lagm1 + flag - klag * z1 - clag * zd1 + om * xs1xd + 2.0 * xi1xd * zd1
     dy[Y_PSI] = om
     if p[P_HOLD_OMEGA] > 0.5:
         omd = 0.0
     else:
         jpol = p[P_IR] + 2.0 * fx - xk2x + 2.0 * p[P_FLAG] * (z0 + z1) - k2lag * (z0 * z0 + z1 * z1)
         jdot = 2.0 * jdot + 2.0 * p[P_FLAG] * (zd0 + zd1) - 2.0 * k2lag * (z0 * zd0 + z1 * zd1)
-        f0 = torque - om * jdot - xhx
-        omd = (f0 - slag * (f1 + f2) / ilag - uf) / (jpol - 2.0 * slag * slag / ilag - ug)
+        f0 = torque - om * jdot - xhx + xs0xd * zd0 + xs1xd * zd1
+        omd = (f0 - sl0 * f1 / il0 - sl1 * f2 / il1 - uf) / (jpol - sl0 * sl0 / il0 - sl1 * sl1 / il1 - ug)
     dy[Y_OMEGA] = omd
-    dy[Y_ZETAD0] = (f1 - slag * omd) / ilag
-    dy[Y_ZETAD0 + 1] = (f2 - slag * omd) / ilag
+    dy[Y_ZETAD0] = (f1 - sl0 * omd) / il0
+    dy[Y_ZETAD0 + 1] = (f2 - sl1 * omd) / il1
     for i in range(ns):
         acc = 0.0
         for k in range(ns):

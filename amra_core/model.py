@@ -71,6 +71,8 @@ class ModelArrays(NamedTuple):
     gyh: np.ndarray  #: (n, n) gyroscopic coupling per coordinate (``H``, symmetric)
     ugy0: np.ndarray  #: (n,) minv @ gy0
     ugyh: np.ndarray  #: (n, n) minv @ gyh
+    ls2: np.ndarray  #: (2, n, n) lag coupling per blade, S_b = S_lag - 1/2 x^T ls2[b] x
+    li2: np.ndarray  #: (2, n, n) lag inertia per blade, I_b = I_lag - x^T li2[b] x
 
 
 @dataclass(frozen=True)
@@ -240,6 +242,8 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
         sf=np.ascontiguousarray(phi.T @ s.f), gy0=np.ascontiguousarray(phi.T @ s.g0),
         gyh=np.ascontiguousarray(phi.T @ s.H @ phi), ugy0=np.ascontiguousarray(minv @ (phi.T @ s.g0)),
         ugyh=np.ascontiguousarray(minv @ (phi.T @ s.H @ phi)),
+        ls2=np.ascontiguousarray(np.array([phi.T @ s.S2[b] @ phi for b in range(2)])),
+        li2=np.ascontiguousarray(np.array([phi.T @ s.I2[b] @ phi for b in range(2)])),
     )
     return CompiledModel(arrays, mesh.n_q, phi.shape[1], len(r), s.kinds, s, phi, phi_pinv, rotor, flight, settings)
 
@@ -255,18 +259,28 @@ def polar_inertia(model: CompiledModel, y: np.ndarray) -> float:
                  - a.p[P_K2LAG] * (z @ z))
 
 
+def lag_inertias(model: CompiledModel, y: np.ndarray):
+    """Per blade (lag coupling S_b, lag inertia I_b) [kg m^2] of the deflected blade."""
+    a = model.arrays
+    x = y[model.x_slice()]
+    S = np.array([a.p[P_SLAG] - 0.5 * x @ a.ls2[b] @ x for b in range(2)])
+    I = np.array([a.p[P_ILAG] - x @ a.li2[b] @ x for b in range(2)])
+    return S, I
+
+
 def angular_momentum(model: CompiledModel, y: np.ndarray) -> float:
     """Angular momentum of the rotor about the shaft [kg m^2/s]:
-    ``Omega J(x) + S_lag (zeta0' + zeta1') + (g0 + H x)^T x'``."""
+    ``Omega J(x) + sum_b S_b(x) zeta_b' + (g0 + H x)^T x'``."""
     a = model.arrays
     x, xd = y[model.x_slice()], y[model.xd_slice()]
     g = a.gy0 + a.gyh @ x
-    return float(y[Y_OMEGA] * polar_inertia(model, y) + a.p[P_SLAG] * (y[Y_ZETAD0] + y[Y_ZETAD1]) + g @ xd)
+    S, _ = lag_inertias(model, y)
+    return float(y[Y_OMEGA] * polar_inertia(model, y) + S @ y[Y_ZETAD0:Y_ZETAD0 + 2] + g @ xd)
 
 
 def mechanical_energy(model: CompiledModel, y: np.ndarray) -> float:
     """Total mechanical energy of the rotor [J] (kinetic, in the inertial frame, plus strain):
-    ``1/2 x'^T M x' + 1/2 I_z |zeta'|^2 + 1/2 Omega^2 J + Omega (S_lag sum zeta' + g^T x')
+    ``1/2 x'^T M x' + 1/2 sum I_b zeta_b'^2 + 1/2 Omega^2 J + Omega (sum S_b zeta_b' + g^T x')
     + 1/2 x^T K0 x + 1/2 k_lag |zeta|^2``. The structural mass is recovered from ``minv``, so the
     value is the mechanical energy only for a ``vacuum`` model (no apparent mass)."""
     a = model.arrays
@@ -275,8 +289,9 @@ def mechanical_energy(model: CompiledModel, y: np.ndarray) -> float:
     om = y[Y_OMEGA]
     M = np.linalg.inv(a.minv)
     g = a.gy0 + a.gyh @ x
-    kin = 0.5 * xd @ M @ xd + 0.5 * a.p[P_ILAG] * (zd @ zd) + 0.5 * om**2 * polar_inertia(model, y) \
-        + om * (a.p[P_SLAG] * zd.sum() + g @ xd)
+    S, I = lag_inertias(model, y)
+    kin = 0.5 * xd @ M @ xd + 0.5 * I @ zd**2 + 0.5 * om**2 * polar_inertia(model, y) \
+        + om * (S @ zd + g @ xd)
     return float(kin + 0.5 * x @ a.k0 @ x + 0.5 * a.p[P_KLAG] * (z @ z))
 
 

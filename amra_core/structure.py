@@ -116,6 +116,8 @@ class RotorStructure:
     g0: np.ndarray  #: gyroscopic coupling with the rotor speed at x = 0 [kg m]
     H: np.ndarray  #: gyroscopic coupling per coordinate (symmetric) [kg m]
     f_lag: float  #: static lag moment per Omega^2 of the chordwise CG offset, r0 int m e [kg m]
+    S2: np.ndarray  #: (2 blades, n, n): lag coupling S_b(x) = S_lag - 1/2 x^T S2[b] x
+    I2: np.ndarray  #: (2 blades, n, n): lag inertia I_b(x) = I_lag - x^T I2[b] x
 
     @property
     def n(self) -> int:
@@ -250,12 +252,40 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
     return f, g0, H
 
 
+def blade_lag_geometry(rotor: Rotor, mesh: BladeMesh):
+    """(S2, I2) of one blade over ``[beta, q]``: how flapping (and teeter) shortens the blade's
+    lag arm. With the foreshortening ``u(r) = 1/2 (r0 beta^2 + int_r0^r w'^2)`` the horizontal
+    radius is ``r - u`` and the lag pivot sits at ``r0 - u(r0)``, so the lag coupling and lag
+    inertia are ``S(x) = int m (r - u)(r - r0 - u + u(r0)) = S0 - 1/2 x^T S2 x`` and
+    ``I_z(x) = I_z0 - x^T I2 x`` to second order, with ``S2 = r0 int m (r - r0) e_beta e_beta^T
+    + int T_S w'w'^T``, ``T_S(s) = int_s^R m (2r - r0)``, and ``I2 = int T_I w'w'^T``,
+    ``T_I(s) = int_s^R m (r - r0)``. They keep the rotor-speed inertia of the blades free to lag,
+    ``J - sum S^2/I_z``, independent of coning (exactly so for a rigid flap), and give the
+    classical flap-lag Coriolis forces."""
+    st = rotor.stations
+    r, wq = quadrature(rotor, mesh)
+    _, dPw, _, _, _ = _blade_shapes(mesh, r)
+    r0 = mesh.root_m
+    TS = _outboard_integral(rotor, r, lambda rho: 2.0 * rho - r0, lambda pm: 2.0 * pm.r_m - r0)
+    TI = _outboard_integral(rotor, r, lambda rho: rho - r0, lambda pm: pm.r_m - r0)
+
+    def integ(a, A, B):
+        return (A * (a * wq)[:, None]).T @ B
+
+    S2 = integ(TS, dPw, dPw)
+    S2[0, 0] += r0 * float(_outboard_integral(rotor, np.array([r0]), lambda rho: rho - r0,
+                                                  lambda pm: pm.r_m - r0)[0])
+    return S2, integ(TI, dPw, dPw)
+
+
 def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = True) -> RotorStructure:
     """Both blades and the teeter hinge, plus the lag/rotor-speed inertias."""
     Mb, K0b, K2b = blade_matrices(rotor, mesh, added_mass, trapeze)
     fb, g0b, Hb = blade_pitch_and_gyro(rotor, mesh, trapeze)
+    S2b, I2b = blade_lag_geometry(rotor, mesh)
     nq = mesh.n_q
     n = 1 + 2 * nq
+    S2 = np.zeros((2, n, n)); I2 = np.zeros((2, n, n))
     M = np.zeros((n, n)); K0 = np.zeros((n, n)); K2 = np.zeros((n, n)); H = np.zeros((n, n))
     f = np.zeros(n); g0 = np.zeros(n)
     for b, sign in ((0, 1.0), (1, -1.0)):
@@ -265,6 +295,8 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
             G[np.ix_(idx, idx)] += B * np.outer(S, S)
         f[idx] += fb * S
         g0[idx] += g0b * S
+        S2[b][np.ix_(idx, idx)] = S2b * np.outer(S, S)
+        I2[b][np.ix_(idx, idx)] = I2b * np.outer(S, S)
     M[0, 0] += rotor.hub_teeter_inertia_kg_m2
     K2[0, 0] += rotor.hub_teeter_inertia_kg_m2  # the hub bar's own centrifugal restoring moment
     kinds = ("teeter",) + tuple(["flap"] * mesh.n_flap + ["torsion"] * mesh.n_torsion) * 2
@@ -294,4 +326,4 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
         f_lag += r0 * pm.mass_kg * ep
     k_lag = K_FLAP_SPRING * st.mean("ei_lag_nm2") / rotor.blade_length_m
     I_R = rotor.hub_polar_inertia_kg_m2 + 2.0 * I_blade
-    return RotorStructure(mesh, M, K0, K2, kinds, blade_of, I_R, I_lag, S_lag, k_lag, k2_lag, f, g0, H, f_lag)
+    return RotorStructure(mesh, M, K0, K2, kinds, blade_of, I_R, I_lag, S_lag, k_lag, k2_lag, f, g0, H, f_lag, S2, I2)
