@@ -66,10 +66,17 @@ class Controls(param.Parameterized):
         if self.run_s > max_run_s:
             self.run_s = float(max_run_s)
         self._applying_preset = False
+        if params.get("preset", "custom") != "custom":  # watchers do not fire on construction
+            self._apply_preset()
+            explicit = {k: v for k, v in params.items() if k != "preset"}
+            with param.parameterized.discard_events(self):
+                self.param.update(**explicit)
 
     @param.depends("preset", watch=True)
     def _apply_preset(self):
         values = PRESETS[self.preset].as_dict()
+        if "run_s" in values:
+            values["run_s"] = min(values["run_s"], self.param.run_s.bounds[1])
         if values:
             self._applying_preset = True
             try:

@@ -116,6 +116,7 @@ class MapRegistry:
         self.max_jobs = max_jobs
         self._lock = threading.Lock()
         self._jobs: "OrderedDict[MapSpec, MapJob]" = OrderedDict()
+        self._live: list = []  #: every job whose thread may still run (cancelled ones included)
         self.jobs_started = 0
 
     def subscribe(self, spec: MapSpec, who) -> MapJob:
@@ -124,6 +125,7 @@ class MapRegistry:
             if job is None or job.state in ("cancelled", "failed"):
                 job = MapJob(spec, self)
                 self._jobs[spec] = job
+                self._live = [j for j in self._live if j.state in ("queued", "running")] + [job]
                 self.jobs_started += 1
                 job.start()
             self._jobs.move_to_end(spec)
@@ -161,8 +163,9 @@ class MapRegistry:
 
     def close(self) -> None:
         with self._lock:
-            jobs = list(self._jobs.values())
+            jobs = list({id(j): j for j in [*self._jobs.values(), *self._live]}.values())
             self._jobs.clear()
+            self._live = []
         for job in jobs:
             job.cancel.set()
         for job in jobs:
