@@ -103,7 +103,8 @@ def _origins(name, text):
 
 def _prefix(name, text):
     p = str(text).strip().strip("/")
-    if p and not re.fullmatch(r"[A-Za-z0-9._~-]+(/[A-Za-z0-9._~-]+)*", p):
+    if p and (not re.fullmatch(r"[A-Za-z0-9._~-]+(/[A-Za-z0-9._~-]+)*", p)
+              or any(seg in (".", "..") for seg in p.split("/"))):
         raise UsageError(f"{name} = {text!r} is not allowed: URL path segments of letters, digits, . _ ~ -")
     return f"/{p}" if p else ""
 
