@@ -16,7 +16,10 @@ batch form: submit them all and yield ``(arg, Outcome)`` as they complete.
 * :class:`DaskExecutor`: ``distributed.Client(address)`` (``pip install 'amra[dask]'``); the workers
   must be able to import ``amra_core``.
 
-An exception inside ``fn`` or a dead worker becomes ``Outcome(ok=False)``; it never escapes ``wait``.
+An exception inside ``fn`` becomes ``Outcome(ok=False)``; it never escapes ``wait``. A call whose worker
+process died (killed, segfault, out of memory) is run again on a fresh pool, up to ``retries``
+times (default 2), before it becomes a failure: a crash is retried, not recorded. (Dask reschedules
+the tasks of a lost worker itself.)
 """
 from __future__ import annotations
 
@@ -122,24 +125,31 @@ class LocalPoolExecutor(CellExecutor):
 
     name = "local"
 
-    def __init__(self, workers: Optional[int] = None, start_method: str = "spawn"):
+    def __init__(self, workers: Optional[int] = None, start_method: str = "spawn", retries: int = 2):
         n = (os.cpu_count() or 1) if workers is None else workers
         if not isinstance(n, int) or n < 1:
             raise ValueError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
         self.workers = n
+        self.retries = retries  #: resubmissions of a call whose worker process died
+        self.restarts = 0  #: pools replaced after a worker died
         self._ctx = mp.get_context(start_method)
         self._pool = cf.ProcessPoolExecutor(max_workers=n, mp_context=self._ctx)
         self._futures: dict = {}
+        self._calls: dict = {}  # future -> (fn, arg, attempt, pool generation)
+        self._gen = 0
 
-    def submit(self, fn, arg, tag=None):
+    def submit(self, fn, arg, tag=None, _attempt=0):
         try:
             fut = self._pool.submit(fn, arg)
         except cf.process.BrokenProcessPool:
             self._restart()
             fut = self._pool.submit(fn, arg)
         self._futures[fut] = tag
+        self._calls[fut] = (fn, arg, _attempt, self._gen)
 
     def _restart(self):
+        self.restarts += 1
+        self._gen += 1
         self._pool.shutdown(wait=False, cancel_futures=True)
         self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx)
 
@@ -147,19 +157,30 @@ class LocalPoolExecutor(CellExecutor):
         if not self._futures:
             return []
         done, _ = cf.wait(list(self._futures), timeout=timeout, return_when=cf.FIRST_COMPLETED)
-        out, broken = [], False
+        out, retry, broken_now = [], [], False
         for fut in done:
             tag = self._futures.pop(fut)
+            fn, arg, attempt, gen = self._calls.pop(fut, (None, None, 0, -1))
             if fut.cancelled():
                 continue
             exc = fut.exception()
             if exc is None:
                 out.append(Outcome(tag, True, fut.result()))
+            elif isinstance(exc, cf.process.BrokenProcessPool) and fn is not None:
+                # its worker died (killed, segfault, out of memory): the whole pool broke with it,
+                # so every call in flight failed; run them again on a fresh pool, not a result
+                broken_now |= gen == self._gen
+                if attempt < self.retries:
+                    retry.append((fn, arg, tag, attempt + 1))
+                else:
+                    out.append(Outcome(tag, False, cf.process.BrokenProcessPool(
+                        f"the worker process died {attempt + 1} times running this call")))
             else:
-                broken |= isinstance(exc, cf.process.BrokenProcessPool)
                 out.append(Outcome(tag, False, exc))
-        if broken:  # a worker died (segfault, out of memory): fresh pool for what follows
+        if broken_now:
             self._restart()
+        for fn, arg, tag, attempt in retry:
+            self.submit(fn, arg, tag, _attempt=attempt)
         return out
 
     @property
@@ -170,7 +191,8 @@ class LocalPoolExecutor(CellExecutor):
         for fut in list(self._futures):
             if fut.cancel():
                 self._futures.pop(fut)
-        self._futures.clear()  # running ones finish in the background; their results are dropped
+        self._futures.clear()
+        self._calls.clear()  # running ones finish in the background; their results are dropped
 
     def close(self):
         self._pool.shutdown(wait=False, cancel_futures=True)
