@@ -20,7 +20,7 @@ from typing import Optional
 
 import numpy as np
 
-from . import kernels
+from . import kernel_guard, kernels
 from .flight import FlightCondition, SolverSettings
 from .model import (N_Y_FIXED, Y_OMEGA, Y_V0, Y_VD, Y_ZETA0, Y_ZETAD0, CompiledModel, compile_model,
                     stable_time_step)
@@ -116,8 +116,8 @@ def jacobian(model: CompiledModel, y0: np.ndarray) -> np.ndarray:
         h = 1e-6 * max(1.0, abs(y0[i]))
         yp = y0.copy(); yp[i] += h
         ym = y0.copy(); ym[i] -= h
-        kernels.evaluate(yp, model.arrays, dy_p, loads)
-        kernels.evaluate(ym, model.arrays, dy_m, loads)
+        kernel_guard.evaluate(yp, model.arrays, dy_p, loads)
+        kernel_guard.evaluate(ym, model.arrays, dy_m, loads)
         J[:, i - 1] = (dy_p[1:] - dy_m[1:]) / (2 * h)
     return J
 
@@ -135,8 +135,8 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float):
         h = 1e-6 * max(1.0, abs(y0[i]))
         yp = y0.copy(); yp[i] += h
         ym = y0.copy(); ym[i] -= h
-        kernels.advance(yp, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
-        kernels.advance(ym, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+        kernel_guard.advance(yp, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+        kernel_guard.advance(ym, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
         Phi[:, i - 1] = (yp[1:] - ym[1:]) / (2 * h)
     return Phi, T
 
@@ -151,7 +151,7 @@ def averaged_jacobian(model: CompiledModel, y0: np.ndarray, period_s: float, n_p
     J = np.zeros((len(y) - 1, len(y) - 1))
     for _ in range(n_points):
         J += jacobian(model, y) / n_points
-        kernels.advance(y, 0.0, period_s / n_points / steps, steps, 10**9, model.arrays, hist, st, -1.0)
+        kernel_guard.advance(y, 0.0, period_s / n_points / steps, steps, 10**9, model.arrays, hist, st, -1.0)
     return J
 
 

@@ -21,7 +21,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import root
 
-from . import kernels
+from . import kernel_guard, kernels
 from .model import (L_FHORIZ, L_FVERT, L_THRUST, L_TORQUE, N_Y_FIXED, CompiledModel, Y_OMEGA,
                     Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step, transfer_state)
 
@@ -133,7 +133,7 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
 
     def resid(z):
         y = unpack(z)
-        kernels.evaluate(y, a, dy, loads)
+        kernel_guard.evaluate(y, a, dy, loads)
         out = [dy[Y_OMEGA]] if free_omega else []
         out += [dy[Y_VD], dy[Y_V0], dy[6], dy[7]]
         return np.concatenate([out, dy[m.xd_slice()]])
@@ -150,9 +150,9 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
             or _inflow_unstable(m, y):
         return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
                           model=model)
-    kernels.evaluate(y, a, dy, loads)
+    kernel_guard.evaluate(y, a, dy, loads)
     y_full = y.copy()
-    kernels.steady_wagner_states(y_full, model.arrays)
+    kernel_guard.steady_wagner_states(y_full, model.arrays)
     tw = _tip_twist(model, y_full)
     return TrimResult("trimmed", y_full, omega, y[Y_VD], 0.0, 0.0, y[Y_V0], loads[L_THRUST], loads[L_TORQUE],
                       0.0, tw, model=model)
@@ -165,9 +165,9 @@ def _inflow_unstable(m: CompiledModel, y: np.ndarray) -> bool:
     h = 1e-4 * max(abs(y[Y_V0]), 1.0)
     dy = np.zeros(m.n_y); loads = np.zeros(8)
     yp = y.copy(); yp[Y_V0] += h
-    kernels.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
+    kernel_guard.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
     yp[Y_V0] -= 2 * h
-    kernels.evaluate(yp, m.arrays, dy, loads)
+    kernel_guard.evaluate(yp, m.arrays, dy, loads)
     return (up - dy[Y_V0]) / (2 * h) > 0.0
 
 
@@ -192,8 +192,8 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
     hist = np.zeros((steps_rev, kernels.N_HIST)); states = np.zeros((steps_rev, len(y)))
     if n_revs > 1:
         dummy_h = np.zeros((1, kernels.N_HIST)); dummy_s = np.zeros((1, len(y)))
-        kernels.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
-    done, rows, status = kernels.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
+        kernel_guard.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
+    done, rows, status = kernel_guard.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
     if status != 0:
         raise FloatingPointError("non-finite state while converging the periodic solution")
     from .model import L_FVERT as _  # noqa: F401  (layout documented in model)
@@ -280,6 +280,15 @@ def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimRe
         if res.ok and hold is not None:
             res.model = model.with_controls(hold_omega=True)
         return res
+    if guess is None and hold is None:
+        return trim_forward_continued(model)  # a cold start only at low speed, then step up
+    return _solve_forward_at(model, hold, guess)
+
+
+def _solve_forward_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:
+    """Forward-flight trim at the model's airspeed or advance ratio from ``guess`` (cold start from
+    the axial trim when None: converges only at low speed, see :func:`trim_forward_continued`)."""
+    fl = model.flight
     if fl.mu is None:
         return trim_forward(model, fl.airspeed_m_s, hold, guess)
     # advance ratio given: fixed point on the airspeed V = mu Omega R / cos(tilt)
@@ -296,6 +305,85 @@ def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimRe
             return res
         omega, tilt, g = res.omega_rad_s, res.disk_tilt_rad, res
     return res
+
+
+#: forward trims are cold-started (from the axial trim, shaft tilt 8 deg, half the axial descent
+#: rate) only up to this advance ratio; faster conditions are reached by continuation from there
+FORWARD_COLD_START_MU = (0.15, 0.1, 0.05)
+FORWARD_STEP_MU = 0.05  #: first continuation step in advance ratio (halved on a failed step)
+FORWARD_MIN_STEP_MU = 0.004
+
+
+def trim_forward_continued(model: CompiledModel) -> TrimResult:
+    """Forward-flight trim (free rotor speed) by continuation in flight speed from a slow condition.
+
+    Why: the cold start of :func:`trim_forward` guesses shaft tilt +8 deg and half the axial descent
+    rate; the trims of the McCutcheon rotor have a forward-tilted shaft (-2.4 deg at mu 0.2, -3.4
+    deg at mu 0.3, -5.2 deg at mu 0.5) and a descent rate of 4-7 m/s. From mu 0.25 up the Newton
+    iteration on 3-revolution averages (whose blade motion has not settled from the bad guess) then
+    wanders with clipped steps and ends unconverged (mu 0.25) or in a non-finite march (mu 0.3), although a
+    trim exists all the way to mu 0.5. So the trim is cold-started at mu <= 0.15 and followed up in
+    advance ratio (or in airspeed, when the airspeed is given) with each trim the guess of the next,
+    halving the step on a failure. When the branch cannot be followed to the requested speed, the
+    result is ``no-autorotation`` with the last trimmed point's state and model and ``branch_end``
+    (``kind: forward-speed``, its advance ratio, airspeed, rotor speed, descent rate, shaft tilt), from
+    which a simulation can start."""
+    from dataclasses import replace as _replace
+    fl = model.flight
+    by_mu = fl.mu is not None
+    target = float(fl.mu) if by_mu else float(fl.airspeed_m_s)
+    omega0 = omega_guess(model)
+    scale = 1.0 if by_mu else omega0 * model.rotor.radius_m  # speed per unit advance ratio [m/s]
+
+    def model_at(s: float) -> CompiledModel:
+        if abs(s - target) < 1e-12:
+            return model
+        f = _replace(fl, mu=s) if by_mu else _replace(fl, airspeed_m_s=s)
+        return _replace(model, flight=f)
+
+    def solve(s, guess) -> Optional[TrimResult]:
+        try:
+            res = _solve_forward_at(model_at(s), None, guess)
+        except FloatingPointError as exc:
+            res = TrimResult("no-autorotation", reason=str(exc), model=model_at(s))
+        return res if res.ok and _plausible(res, guess) else None
+
+    prev, s_prev = None, None
+    for s0 in sorted({min(target, mu0 * scale) for mu0 in FORWARD_COLD_START_MU}, reverse=True):
+        prev = solve(s0, None)
+        if prev is not None:
+            s_prev = s0
+            break
+    if prev is None:
+        return TrimResult("no-autorotation", model=model,
+                          reason=f"no forward-flight trim even at mu <= {FORWARD_COLD_START_MU[0]:g} "
+                                 f"(cold starts from the axial trim did not converge)")
+    step = FORWARD_STEP_MU * scale
+    while s_prev < target - 1e-12:
+        s = min(target, s_prev + step)
+        res = solve(s, prev)
+        if res is not None and res.ok:
+            prev, s_prev = res, s
+            step = min(FORWARD_STEP_MU * scale, 1.5 * step)
+            continue
+        step *= 0.5
+        if step < FORWARD_MIN_STEP_MU * scale:
+            break
+    if s_prev >= target - 1e-12 and prev.model.flight == model.flight:
+        return prev
+    out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
+    what = f"mu {s_prev:.3g}" if by_mu else f"airspeed {s_prev:.3g} m/s"
+    out.reason = (f"no steady autorotation: the forward-flight trim branch, followed up in "
+                  f"{'advance ratio' if by_mu else 'airspeed'} from a slow trim, ends at {what} "
+                  f"(no trim for a step of {step / scale:.2g} in mu beyond it)")
+    out.branch_end = {"kind": "forward-speed", "mu": float(prev.mu), "airspeed_m_s": float(prev.airspeed_m_s),
+                      "omega_rad_s": float(prev.omega_rad_s), "descent_rate_m_s": float(prev.descent_rate_m_s),
+                      "disk_tilt_rad": float(prev.disk_tilt_rad), "tip_twist_rad": float(prev.tip_twist_rad),
+                      "gj_mean_nm2": gj_mean_of(prev.model),
+                      "requested_mu": float(fl.mu) if by_mu else None,
+                      "requested_airspeed_m_s": None if by_mu else float(fl.airspeed_m_s)}
+    out.start = prev
+    return out
 
 
 def _faster_branch(model: CompiledModel, hold, prev: TrimResult) -> Optional[TrimResult]:

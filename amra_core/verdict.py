@@ -14,7 +14,10 @@ from typing import Optional
 
 import numpy as np
 
-VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure")
+#: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
+#: says which and how long a run is needed); neither stable nor unstable, never counted as either
+VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure",
+            "undetermined")
 UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
 
 #: a perturbation growing faster than this [1/s] is unstable (|e^(0.02 * 10 s)| = 1.22 over a run)
@@ -102,6 +105,8 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     ``ref_row`` is the history row of the unperturbed starting state."""
     cols = {c: i for i, c in enumerate(columns)}
     h = history
+    if len(h) == 0:
+        return Verdict("undetermined", None, None, None, explanation="no data yet: nothing has been simulated")
     if status == "numerical-failure" or not np.isfinite(h).all():
         return Verdict("numerical-failure", None, None, None, explanation=("the time step left its stability region (non-finite state or an impossible "
                                      "jump of the rotor speed): the run was stopped; try a smaller dt_s"))
@@ -133,7 +138,12 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end")
     if growth is None:
-        return Verdict("stable", None, freq, None, amp_end, "run too short to identify a growth rate")
+        window_s = max(2 * math.pi / omega_ref, 0.1)
+        need = (3 * window_s + (0.0 if axial else 2 * math.pi / omega_ref))
+        return Verdict("undetermined", None, freq, None, amp_end,
+                       f"run too short to identify a growth rate: {float(t[end - 1] - t[0]) if end else 0.0:.3g} s "
+                       f"simulated, the envelope fit needs at least 3 windows of {window_s:.3g} s "
+                       f"(about {need:.2g} s{'' if axial else ', after the first revolution'})")
     if growth > GROWTH_THRESHOLD_PER_S or (amp_end is not None and amp_end > 20.0):
         kind = "flutter" if oscill else "divergence"
         why = "growing oscillation" if oscill else "monotonic runaway"
