@@ -22,6 +22,7 @@ flag                           variable                          default
 ``--max-run-s S``              ``AMRA_MAX_RUN_S``                120 (per-session cap on run length)
 ``--max-message-bytes B``      ``AMRA_MAX_MESSAGE_BYTES``        4 MiB (largest websocket message in)
 ``--admin``                    ``AMRA_ADMIN`` (1/0)              off (``/admin`` shows every session)
+``--use-xheaders``             ``AMRA_USE_XHEADERS`` (1/0)       off (behind a TLS proxy: on)
 ``--log-level``                ``AMRA_LOG_LEVEL``                info
 =============================  ================================  =======================================
 
@@ -149,6 +150,7 @@ _SPECS = {
     "max_message_bytes": ("--max-message-bytes", "AMRA_MAX_MESSAGE_BYTES",
                           lambda n, t: _int(n, t, 64 * 1024, 256 * 1024 * 1024), 4 * 1024 * 1024),
     "admin": ("--admin", "AMRA_ADMIN", _bool, False),
+    "use_xheaders": ("--use-xheaders", "AMRA_USE_XHEADERS", _bool, False),
     "log_level": ("--log-level", "AMRA_LOG_LEVEL", lambda n, t: _choice(n, t, _LOG_LEVELS), "info"),
 }
 
@@ -168,7 +170,7 @@ def resolve(args, environ: Mapping[str, str]) -> dict:
         if given is not None:
             s[dest] = parse(flag, ",".join(given) if isinstance(given, list) else given) \
                 if not isinstance(given, bool) else given
-        elif environ.get(var, "").strip() != "" or (dest in ("liveness", "admin") and var in environ):
+        elif environ.get(var, "").strip() != "" or (dest in ("liveness", "admin", "use_xheaders") and var in environ):
             s[dest] = parse(var, environ[var])
         else:
             s[dest] = default
@@ -211,6 +213,8 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
         argv += ["--prefix", s["prefix"]]
     if s["admin"]:
         argv += ["--admin"]
+    if s["use_xheaders"]:
+        argv += ["--use-xheaders"]
     env = dict(environ)
     # ours win over Panel's own spellings of the same setting (Panel refuses both at once)
     env.pop("PANEL_NUM_THREADS", None)
@@ -294,6 +298,8 @@ def register(sub) -> None:
     p.add_argument("--max-run-s", metavar="S", help="per-session cap on run length [s] (AMRA_MAX_RUN_S)")
     p.add_argument("--max-message-bytes", metavar="B", help="largest websocket message accepted (AMRA_MAX_MESSAGE_BYTES)")
     p.add_argument("--admin", action="store_true", default=None, help="serve /admin (AMRA_ADMIN)")
+    p.add_argument("--use-xheaders", action="store_true", default=None,
+                   help="trust X-Forwarded-* headers of a reverse proxy (AMRA_USE_XHEADERS)")
     p.add_argument("--log-level", help=f"one of {', '.join(_LOG_LEVELS)} (AMRA_LOG_LEVEL)")
     p.add_argument("--print-command", action="store_true", help="print the panel command and settings, do not serve")
     p.set_defaults(func=cmd_serve)
