@@ -7,7 +7,7 @@ motion). Their envelope (the maximum per window of one revolution, or 0.2 s) is 
 squares in log scale: the slope is the growth rate [1/s].
 
 Runs without a trim (started from a branch end, model-notes §7) are judged by where the rotor goes:
-into the windmill-brake state (descent beyond 2 v_h) or still falling at the end: ``no-autorotation``;
+into the windmill-brake state (axial flight, descent beyond 2 v_h) or still falling at the end: ``no-autorotation``;
 settled at another rotor speed: the motion after it settled is judged as a trimmed run's would be
 (the explanation says where it settled); still moving otherwise: ``undetermined`` (run longer).
 No data, or too little for the envelope fit: ``undetermined`` with the reason, never ``stable``.
@@ -22,9 +22,10 @@ import numpy as np
 
 #: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
 #: says which and how long a run is needed); neither stable nor unstable, never counted as either
-#: ``windmill-brake``: the run starts and stays on the windmill-brake side (descent rate beyond the
-#: turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8 §2);
-#: a run that starts in normal autorotation and ends there is ``no-autorotation``
+#: ``windmill-brake``: an axial run starts and stays on the windmill-brake side (descent rate beyond
+#: the turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8
+#: §2), so counted with the unstable verdicts; an untrimmed axial run that ends there is
+#: ``no-autorotation``
 VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake", "numerical-failure",
             "undetermined")
 UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake")
@@ -182,7 +183,9 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            "no torque equilibrium exists: the rotor speed decayed from the start")
         return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
-    if hover_induced_m_s and len(t) >= 2 and collapse is None and status != "rotor-stopped":
+    # axial flight only: in forward flight the mass flow is set by the airspeed, and a descent
+    # rate of a few v_h is an ordinary glide (15 m/s at 80 m/s airspeed is an 11 deg path)
+    if axial and hover_induced_m_s and len(t) >= 2 and collapse is None and status != "rotor-stopped":
         vd = h[:, cols["descent_rate_m_s"]]
         tail = vd[t >= t[-1] - window]
         x_end = -float(np.mean(tail)) / hover_induced_m_s
