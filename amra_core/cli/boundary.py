@@ -4,7 +4,8 @@
         [--cg 0.20:0.50:16] [--gj 30:3000] [--aero theodorsen] [--method eigen|time] \\
         [--workers N] [--scheduler ADDR] [--store FILE] [--out map.csv] [--plot map.png] [--json] [--quiet]
 
-Prints the critical GJ per CG column (or, with ``--json``, an object with ``critical_gj``,
+Prints the critical GJ per CG column with every interval of the column (stable, flutter, fold,
+windmill-brake; GJ in N m^2/rad) (or, with ``--json``, an object with ``critical_gj``,
 ``boundaries``, ``cells``, ``cases``, ``cached_cases``, ``wall_time_s``, ...). A progress bar goes
 to stderr when it is a terminal. Bad values exit with code 2 and a message naming the parameter and
 its allowed range. Ctrl-C (SIGINT) or SIGTERM cancels the map cleanly: the workers are stopped, the
@@ -31,8 +32,9 @@ from .common import dumps_strict, number, value_range
 def register(sub) -> None:
     """Add the ``boundary`` sub-command to the ``amra`` parser's sub-parsers ``sub``."""
     p = sub.add_parser("boundary", help="stability boundary map over CG x GJ (paper Fig. 14)",
-                       description="Stability boundary map over CG x GJ: coarse grid, then bisection in log GJ "
-                                   "per CG column until each transition is bracketed to --tol.")
+                       description="Stability boundary map over CG x GJ: each CG column is walked down its trim "
+                                   "branch by continuation from --gj's upper end, with every stability change "
+                                   "and the fold bracketed to --tol.")
     g = p.add_mutually_exclusive_group()
     g.add_argument("--preset", help="shipped rotor preset (default paper-boundary)")
     g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
@@ -47,7 +49,7 @@ def register(sub) -> None:
     p.add_argument("--tol", type=number("--tol", 1e-4, 1.0), default=0.02,
                    help="relative GJ bracket width at which bisection stops (default 0.02)")
     p.add_argument("--coarse", type=number("--coarse", 2, 200, integer=True), default=7,
-                   help="GJ values of the coarse grid (default 7)")
+                   help="GJ values of the log grid probed below a fold (default 7)")
     p.add_argument("--method", choices=("eigen", "time"), default="eigen",
                    help="eigen: linearised about trim; time: time marching from trim plus a kick")
     p.add_argument("--elements", type=number("--elements", 1, 60, integer=True), default=10,
@@ -205,6 +207,11 @@ def cmd_boundary(args) -> int:
             gs = "-" if g is None else ("> GJ max" if not math.isfinite(g) else f"{g:.1f}")
             br = "" if not col["bracket"] else f"[{col['bracket'][0]:.1f}, {col['bracket'][1]:.1f}]"
             print(f"{col['cg']:8.3f} {gs:>24s} {br:>22s}  {col['status']}" + (f" ({col['kind']})" if col.get("kind") else ""))
+            ivs = col.get("intervals") or []
+            if ivs:
+                print(" " * 10 + "; ".join(f"{iv['kind']} {iv['gj_lo_nm2']:.0f}-{iv['gj_hi_nm2']:.0f}"
+                                           + ("" if iv.get("resolved", True) else " (edge from the probe grid)")
+                                           for iv in ivs))
         for k in ("csv", "plot"):
             if k in out:
                 print(f"{k}: {out[k]}")
