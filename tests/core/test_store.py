@@ -312,25 +312,26 @@ SPEC = MapSpec(cg_values=(0.38, 0.44, 0.50))
 
 
 def test_interrupted_map_resumes_with_only_the_missing_cells(tmp_path):
+    """The map engine stores whole columns: cancelled in its second column, the first is kept and
+    served on the rerun, the rest computed, and the map equals an uninterrupted one."""
     path = tmp_path / "cells.sqlite"
     reference = run_map(SPEC, workers=1)
     cancel, got = threading.Event(), []
 
     def on_cell(c):
         got.append(c)
-        if len(got) == 12:
+        if c.cg == SPEC.cg_values[1]:
             cancel.set()
 
     with CellStore(path, solver=solver_fingerprint()) as st:
         part = run_map(SPEC, workers=1, store=st, on_cell=on_cell, cancel=cancel)
-        assert part.cancelled and part.cases == 12 and len(st) == 12
-    computed = []
+        assert part.cancelled
+    first = [c for c in reference.cells if c.cg == SPEC.cg_values[0]]
     with CellStore(path, solver=solver_fingerprint()) as st:
-        resumed = run_map(SPEC, workers=1, store=st, on_cell=computed.append)
-        assert len(st) == resumed.cases
+        resumed = run_map(SPEC, workers=1, store=st)
     assert resumed.complete
-    assert resumed.cached_cases == 12
-    assert resumed.computed_cases == reference.cases - 12
+    assert resumed.cached_cases == len(first) > 0
+    assert resumed.computed_cases == reference.cases - len(first)
     assert resumed.critical_gj == reference.critical_gj
     assert [c.to_dict() for c in resumed.cells] == [c.to_dict() for c in reference.cells]
     assert resumed.boundaries == reference.boundaries
