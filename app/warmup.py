@@ -1,42 +1,42 @@
-"""Warm the Numba kernels before the first session (``panel serve --setup app/warmup.py``, run
-once in every server process, also under ``--num-procs``; and ``python app/warmup.py`` at image
-build time, which fills ``NUMBA_CACHE_DIR``).
+"""``panel serve --setup app/warmup.py``: run once per server process before any session.
 
-A short rigid run and a short fem-coupled run load (or, on a cold cache, compile and store) every
-kernel a dashboard run uses, so the first user does not wait for compilation. Failures are
-reported and swallowed: a server whose warm-up failed still serves, only the first run is slower.
+Compiles (or loads from Numba's cache) the kernels a session uses, trim, a short run at every
+fidelity, the stability analysis and the fan plot, so the first user does not wait for the JIT,
+and creates the process-wide map registry.
 """
 from __future__ import annotations
 
-import sys
 import time
 
 
-def warmup() -> dict:
-    """Advance a rigid and a fem-coupled simulation a few steps; ``{fidelity: seconds}``."""
+def warm() -> float:
+    """Warm the solver paths the dashboard uses; returns the time taken [s]."""
+    t0 = time.perf_counter()
     from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.model import compile_model
+    from amra_core.modes import fan_plot
     from amra_core.rotor_io import load_preset
     from amra_core.simulation import Case, Simulation
+    from amra_core.stability import analyse
 
-    rotor = load_preset("mccutcheon")
-    timings = {}
-    for fidelity, mu in (("rigid", 0.0), ("fem-coupled", 0.1)):
-        t0 = time.perf_counter()
-        sim = Simulation(Case(rotor, FlightCondition(mu=mu or None),
-                              SolverSettings(fidelity=fidelity, n_elements=4)))
-        sim.advance(n_steps=1)
-        timings[fidelity] = round(time.perf_counter() - t0, 2)
-    return timings
-
-
-def _run() -> None:
-    try:
-        t = warmup()
-        print(f"amra warm-up: Numba kernels ready ({', '.join(f'{k} {v} s' for k, v in t.items())})",
-              file=sys.stderr, flush=True)
-    except Exception as exc:  # noqa: BLE001 - never stop the server for a failed warm-up
-        print(f"amra warm-up failed ({type(exc).__name__}: {exc}); the first run will compile",
-              file=sys.stderr, flush=True)
+    rotor = load_preset("paper-boundary")
+    for fid in ("rigid", "fem-torsion", "fem-coupled"):
+        settings = SolverSettings(fidelity=fid)
+        sim = Simulation(Case(rotor, FlightCondition(), settings, t_end_s=0.1))
+        sim.advance(span_s=0.05)
+        sim.set_parameters(gj_nm2=1400.0)
+        sim.advance(span_s=0.05)
+        sim.verdict()
+        sim.spanwise_last_revolution()
+        analyse(compile_model(rotor, FlightCondition(), settings))
+    fan_plot(rotor, [0.0, 30.0], fidelity="rigid")
+    return time.perf_counter() - t0
 
 
-_run()
+if __name__ in ("panel_setup_module", "__main__"):
+
+    from app.map_jobs import get_registry  # noqa: E402
+    from app.settings import ServerSettings  # noqa: E402
+
+    get_registry(ServerSettings.from_env())
+    print(f"AMRA warm-up: kernels ready in {warm():.1f} s", flush=True)

@@ -68,7 +68,7 @@ def test_pool_worker_killed_mid_map(reference, tmp_path):
 
 
 def test_pool_call_that_always_kills_its_worker_ends_as_failure():
-    with LocalPoolExecutor(1, retries=2) as ex:
+    with LocalPoolExecutor(1, max_retries=2) as ex:
         ex.submit(os._exit, 3, "suicide")
         ex.submit(abs, -4, "fine")
         outs = []
