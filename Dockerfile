@@ -62,8 +62,11 @@ RUN pip install --no-deps --no-build-isolation -e . \
 
 # Fill the Numba cache as the runtime user, with the runtime settings above: the first
 # simulation of every server process then loads machine code instead of compiling it.
+# (The warm-up also opens the map registry's store: a scratch one, removed, so nothing but the
+# cache is left in the image.)
 USER amra
-RUN python3 app/warmup.py && du -sh "$NUMBA_CACHE_DIR"
+RUN AMRA_STORE=/tmp/warm-store.sqlite python3 app/warmup.py \
+    && rm -f /tmp/warm-store.sqlite* && du -sh "$NUMBA_CACHE_DIR"
 
 ENV AMRA_ADDRESS=0.0.0.0 \
     AMRA_PORT=5006 \

@@ -77,7 +77,7 @@ def test_pool_call_that_always_kills_its_worker_ends_as_failure():
             outs += ex.wait(timeout=1)
     by_tag = {o.tag: o for o in outs}
     assert by_tag["fine"].ok and by_tag["fine"].value == 4
-    assert not by_tag["suicide"].ok and "died 3 times" in by_tag["suicide"].reason
+    assert not by_tag["suicide"].ok and "WorkerDied" in by_tag["suicide"].reason and "3 tries" in by_tag["suicide"].reason
 
 
 def test_dask_worker_killed_mid_map(reference):
