@@ -80,8 +80,12 @@ def check_model_arrays(m: ModelArrays) -> tuple:
     with _LOCK:
         hit = _VALIDATED.get(id(m))
     if hit is None or hit[0] is not m or hit[1:] != (ns, nst, inflow3):
-        for name in ("minv", "k0", "k2", "c"):
+        for name in ("minv", "k0", "k2", "c", "gyh", "ugyh"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (ns, ns))
+        for name in ("sf", "gy0", "ugy0"):
+            _shape(f"ModelArrays.{name}", getattr(m, name), (ns,))
+        for name in ("ls2", "li2"):
+            _shape(f"ModelArrays.{name}", getattr(m, name), (2, ns, ns))
         _shape("ModelArrays.st", m.st, (nst, N_S_COLS))
         for name in ("shw", "shd", "sht"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (2, nst, ns))
