@@ -6,6 +6,7 @@ Measures, and prints as JSON (each map on a local pool of ``--workers`` processe
   time [s], cells, cells/s (target <= 5 s); then the same map from a store (target <= 1 s);
 * ``rigid_mu0.1``: the rigid map at mu = 0.1 (target <= 30 s);
 * ``fem-coupled_mu0.1`` (unless ``--no-fem``): the fem-coupled map at mu = 0.1 (target <= 120 s);
+* ``fem-coupled_axial`` (only with ``--only``): the fem-coupled axial map (no target);
 * ``revolutions``: revolutions marched per cell, split into trim and monodromy, from one forward
   column walked in this process (rigid, and fem-coupled unless ``--no-fem``; CG ``--rev-cg``).
 Also the machine's load average before and after, since the machine is shared.
@@ -39,7 +40,9 @@ def _map_figures(bmap) -> dict:
             "cells_per_s": round(bmap.cells_per_s, 2) if bmap.computed_cases else None,
             "verdicts": {k: v for k, v in bmap.verdict_counts().items() if v},
             "critical_gj": [[round(cg, 4), fin(g)] for cg, g in bmap.critical_gj],
-            "statuses": sorted({c["status"] for c in bmap.columns}), "executor": bmap.executor}
+            "statuses": sorted({c["status"] for c in bmap.columns}), "executor": bmap.executor,
+            "intervals": {f"{c['cg']:.3f}": "; ".join(f"{iv['kind']} {iv['gj_lo_nm2']:.0f}-{iv['gj_hi_nm2']:.0f}"
+                                                       for iv in c["intervals"]) for c in bmap.columns}}
 
 
 def _revolutions(fidelity: str, cg: float) -> dict:
@@ -107,6 +110,8 @@ def main(argv=None) -> int:
         key = f"{fid}_mu0.1"
         if want(key):
             out[key] = _map_figures(run_map(MapSpec(fidelity=fid, mu=0.1), workers=args.workers))
+    if only and "fem-coupled_axial" in only:  # not a target: only on request
+        out["fem-coupled_axial"] = _map_figures(run_map(MapSpec(fidelity="fem-coupled"), workers=args.workers))
     if want("revolutions"):
         out["revolutions"] = {fid: _revolutions(fid, args.rev_cg)
                               for fid in ("rigid",) + (() if args.no_fem else ("fem-coupled",))}
