@@ -42,6 +42,8 @@ class LatestTasks:
         self._thread.join(5.0)
 
     def _loop(self) -> None:
+        from .server_limits import lower_priority_of_this_thread
+        lower_priority_of_this_thread()  # analyses yield the CPU to the live run (server_limits)
         while True:
             with self._cond:
                 while not self._queued and not self._closed:
