@@ -34,7 +34,8 @@ The basic-auth file is JSON, ``{"user": "password", ...}`` (a password is never 
 command line, where ``ps`` shows it). Secrets reach Panel through its environment, not its argv.
 
 The app reads its settings from the environment of the server process: ``AMRA_STORE``,
-``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S``.
+``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S`` (and, passed through unchanged,
+``AMRA_STREAM_PERIOD_MS``: each session's page-update period [ms], default 50).
 """
 from __future__ import annotations
 
