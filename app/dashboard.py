@@ -8,7 +8,6 @@ map subscription (:meth:`Dashboard.close`).
 """
 from __future__ import annotations
 
-import math
 import queue
 from typing import Optional
 
@@ -17,16 +16,14 @@ import pandas as pd
 import panel as pn
 
 from amra_core.boundary import MapSpec
-from amra_core.model import compile_model
-from amra_core.stability import analyse
 
 from . import exports
-from .background import LatestTasks
+from . import analysis
+from .background import LatestTasks, get_analysis_pool
 from .controls import LIVE_PARAMETERS, UPLOADED, Controls
 from .disc_view import DiscView
-from .fan_view import FanView, fan_data
-from .ladder import LadderView, ladder_cases, run_ladder
-from .locus import walk
+from .fan_view import FanView
+from .ladder import LadderView, ladder_cases
 from .map_view import MapView
 from .modes_view import ModesView
 from .rotor_upload import UploadError, parse_rotor_upload
@@ -40,17 +37,16 @@ MAP_POLL_EVERY = 8  #: pump ticks between map polls (0.4 s)
 CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)
-LOCUS_GJ_RANGE = (50.0, 3000.0)
 
 
 class Dashboard(pn.viewable.Viewer):
-    def __init__(self, settings: Optional[ServerSettings] = None, registry=None, **params):
+    def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, **params):
         super().__init__(**params)
         self.settings = settings or ServerSettings.from_env()
         self.controls = Controls(max_run_s=self.settings.max_run_s)
         self.outbox: queue.SimpleQueue = queue.SimpleQueue()
         self.worker = RunWorker(self._post)
-        self.tasks = LatestTasks(self._post)
+        self.tasks = LatestTasks(self._post, pool if pool is not None else get_analysis_pool())
         self.histories = TimeHistories()
         self.verdict = VerdictCard()
         self.modes = ModesView()
@@ -125,7 +121,7 @@ class Dashboard(pn.viewable.Viewer):
             self.notify(f"cannot run the ladder: {exc}")
             return
         self.ladder.info.object = "Running the case at rigid, fem-torsion and fem-coupled ..."
-        self.tasks.submit("ladder", lambda cancel: run_ladder(cases, cancel))
+        self.tasks.submit("ladder", analysis.run_ladder, cases)
 
     def upload(self, data: bytes, filename: str) -> bool:
         try:
@@ -179,13 +175,12 @@ class Dashboard(pn.viewable.Viewer):
         except Exception as exc:  # noqa: BLE001
             self.notify(f"invalid case: {exc}")
             return
-        self.tasks.submit("modes", lambda cancel: _modes_result(rotor, flight, settings))
+        self.tasks.submit("modes", analysis.modes_result, rotor, flight, settings)
         key = (c.rotor, id(self.uploaded), c.ea_pct, c.cg_pct, flight, settings)
         if key != self._locus_key:
             self._locus_key = key
-            base = rotor
-            self.tasks.submit("locus", lambda cancel: _locus_result(base, flight, settings, c.cg_pct / 100.0, cancel))
-        self.tasks.submit("fan", lambda cancel: fan_data(rotor, settings.fidelity))
+            self.tasks.submit("locus", analysis.locus_result, rotor, flight, settings, c.cg_pct / 100.0)
+        self.tasks.submit("fan", analysis.fan_data, rotor, settings.fidelity)
         if self.map is not None:
             try:
                 self.map.follow(self.map_spec())
@@ -288,28 +283,3 @@ class Dashboard(pn.viewable.Viewer):
         from .layout import build_layout
         return build_layout(self)
 
-
-def _modes_result(rotor, flight, settings) -> dict:
-    with np.errstate(all="ignore"):
-        res = analyse(compile_model(rotor, flight, settings))
-    if not res.trim.ok:
-        return {"modes": [], "text": f"**No trim** for this case, so no modes: {res.trim.reason}"}
-    kind = "eigenvalues (axial flight)" if res.method == "eigenvalues" else "Floquet exponents (forward flight)"
-    crit = res.critical
-    verdict = "**stable**" if res.stable else f"**unstable**: {crit.label} mode, σ = {crit.real_part_per_s:+.3g} 1/s"
-    return {"modes": res.modes, "text": f"Modes of the trim ({kind}) at Ω = {res.trim.omega_rad_s:.2f} rad/s: "
-                                        f"{verdict}"}
-
-
-def _locus_result(rotor, flight, settings, cg, cancel) -> dict:
-    with np.errstate(all="ignore"):
-        pts = walk(rotor, flight, settings, cg, *LOCUS_GJ_RANGE, cancel=cancel)
-    trimmed = [p for p in pts if p.trimmed]
-    text = f"Root locus: {len(pts)} GJ values from {LOCUS_GJ_RANGE[1]:g} down to {LOCUS_GJ_RANGE[0]:g} N m²/rad"
-    if len(trimmed) < len(pts):
-        low = min((p.gj_nm2 for p in trimmed), default=math.nan)
-        text += f"; no trim (fold) below about {low:.4g} N m²/rad"
-    unstable = [p.gj_nm2 for p in trimmed if not p.stable]
-    if unstable:
-        text += f"; unstable trims at GJ ≤ {max(unstable):.4g} N m²/rad"
-    return {"points": pts, "text": text}

@@ -10,14 +10,9 @@ from holoviews.streams import Pipe, Stream
 
 OMEGA_DIM = hv.Dimension("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
 F_DIM = hv.Dimension("frequency_hz", label="Natural frequency", unit="Hz")
-OMEGA_MAX = 60.0  #: top of the fan plot's speed axis [rad/s]
+from .analysis import FAN_OMEGA_MAX as OMEGA_MAX
+
 Omega = Stream.define("Omega", omega=0.0)
-
-
-def fan_data(rotor, fidelity: str, n_modes: int = 8) -> dict:
-    from amra_core.modes import fan_plot
-    fp = fan_plot(rotor, np.linspace(0.0, OMEGA_MAX, 31), fidelity=fidelity, n_modes=n_modes)
-    return {"omega": fp["omega_rad_s"], "modes": [(m["label"], m["frequency_hz"]) for m in fp["modes"]]}
 
 
 class FanView(pn.viewable.Viewer):

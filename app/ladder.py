@@ -1,11 +1,8 @@
 """The fidelity ladder (the paper's central comparison): the same case at rigid, fem-torsion and
-fem-coupled, run side by side (unpaced, in the session's analysis thread) and overlaid with a
-legend, with each run's verdict. The previous-run overlay of the live plots is in
-:mod:`app.streams`."""
+fem-coupled, run side by side (unpaced, in the analysis process: :func:`app.analysis.run_ladder`)
+and overlaid with a legend, with each run's verdict; and the previous run overlaid (dashed) on the
+one that just finished."""
 from __future__ import annotations
-
-import math
-import threading
 
 import holoviews as hv
 import numpy as np
@@ -14,40 +11,12 @@ import panel as pn
 from holoviews.streams import Pipe
 
 from amra_core.shapes import FIDELITIES
-from amra_core.simulation import COL, Simulation
 
+from .analysis import LADDER_POINTS as MAX_POINTS
 from .streams import DIMS
 
 COLOURS = {"rigid": "#1565c0", "fem-torsion": "#ef6c00", "fem-coupled": "#6a1b9a", "previous run": "#9e9e9e",
            "last run": "#1f77b4"}
-MAX_POINTS = 2000
-
-
-def run_ladder(cases: dict, cancel: threading.Event) -> dict:
-    """``{fidelity: Case}`` -> ``{"runs": {fidelity: {t, omega, teeter_deg, twist_deg}}, "verdicts": frame}``."""
-    runs, rows = {}, []
-    for fid, case in cases.items():
-        if cancel.is_set():
-            break
-        try:
-            with np.errstate(all="ignore"):
-                sim = Simulation(case)
-                while sim.status == "running" and sim.t < case.t_end_s - 1e-9 and not cancel.is_set():
-                    sim.advance(span_s=min(0.5, case.t_end_s - sim.t))
-                v = sim.verdict()
-        except Exception as exc:  # noqa: BLE001 - one failed rung does not stop the ladder
-            rows.append((fid, "failed", None, None, None, str(exc)))
-            continue
-        h = sim.history
-        idx = np.linspace(0, len(h) - 1, min(MAX_POINTS, len(h))).astype(int)
-        h = h[idx]
-        runs[fid] = {"t": h[:, COL["t_s"]], "omega": h[:, COL["omega_rad_s"]],
-                     "teeter_deg": np.degrees(h[:, COL["teeter_rad"]]),
-                     "twist_deg": np.degrees(h[:, COL["tip_twist_0_rad"]])}
-        rows.append((fid, v.verdict, v.growth_rate_per_s, v.frequency_hz, v.collapse_time_s, v.explanation))
-    frame = pd.DataFrame(rows, columns=["fidelity", "verdict", "growth rate [1/s]", "frequency [Hz]",
-                                        "collapse time [s]", "explanation"])
-    return {"runs": runs, "verdicts": frame}
 
 
 class LadderView(pn.viewable.Viewer):
@@ -72,7 +41,9 @@ class LadderView(pn.viewable.Viewer):
 
     def show(self, result: dict) -> None:
         self.pipe.send(result["runs"])
-        self.table.object = result["verdicts"]
+        self.table.object = pd.DataFrame(result["verdicts"], columns=["fidelity", "verdict", "growth rate [1/s]",
+                                                                      "frequency [Hz]", "collapse time [s]",
+                                                                      "explanation"])
 
     def _plot(self, runs, key, dim, title):
         layers = [hv.Curve((r["t"], r[key]), DIMS["t_s"], dim, label=fid).opts(

@@ -18,8 +18,15 @@ from app.url_sync import apply_session_query, sync_url
 __all__ = ["TITLE", "create_app"]
 
 
+def serve_resources_locally() -> None:
+    """Bokeh and Panel JS/CSS from this server, never a CDN: the page must work offline."""
+    from bokeh.settings import settings
+    settings.resources.set_value("server")
+
+
 def create_app():
     """Build a fresh page for one session (needs a server session for URL sync and the pump)."""
+    serve_resources_locally()
     pn.extension(notifications=True, throttled=True)
     hv.extension("bokeh", logo=False)
     settings = ServerSettings.from_env()

@@ -17,7 +17,8 @@ from dataclasses import replace
 from typing import Optional
 
 from amra_core.boundary import MapSpec, cell_class, iter_map, solver_fingerprint
-from amra_core.executor import make_executor
+from amra_core.executor import DaskExecutor, LocalPoolExecutor
+
 from .server_limits import Busy, FairSlots, lower_priority_of_this_thread, open_store
 
 from .settings import ServerSettings
@@ -59,7 +60,10 @@ class MapJob:
             self.state = "running"
             ex = None
             try:
-                ex = make_executor(reg.settings.map_workers, reg.settings.dask_scheduler)
+                # cells in other processes (trim and eigen-analysis hold the GIL: in this process
+                # they would starve the sessions' event loop)
+                sched = reg.settings.dask_scheduler
+                ex = DaskExecutor(sched) if sched else LocalPoolExecutor(reg.settings.map_workers)
                 run = iter_map(self.spec, executor=ex, store=reg.store, cancel=self.cancel)
                 for cell in run:
                     self.store_error = getattr(run, "store_error", "")

@@ -2,7 +2,7 @@
 
 Compiles (or loads from Numba's cache) the kernels a session uses, trim, a short run at every
 fidelity, the stability analysis and the fan plot, so the first user does not wait for the JIT,
-and creates the process-wide map registry.
+and creates the process-wide map registry and analysis process pool.
 """
 from __future__ import annotations
 
@@ -35,8 +35,11 @@ def warm() -> float:
 
 if __name__ in ("panel_setup_module", "__main__"):
 
+    from app.analysis import warm_worker  # noqa: E402
+    from app.background import get_analysis_pool  # noqa: E402
     from app.map_jobs import get_registry  # noqa: E402
     from app.settings import ServerSettings  # noqa: E402
 
     get_registry(ServerSettings.from_env())
+    get_analysis_pool().submit(warm_worker)  # start and warm the analysis process too
     print(f"AMRA warm-up: kernels ready in {warm():.1f} s", flush=True)

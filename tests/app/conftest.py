@@ -19,6 +19,15 @@ def _reset_panel_state():
     pn.state.reset()
 
 
+@pytest.fixture(scope="session")
+def analysis_pool():
+    """One analysis process for the whole test session (spawning one costs seconds)."""
+    from app.background import AnalysisPool
+    pool = AnalysisPool()
+    yield pool
+    pool.close()
+
+
 @pytest.fixture
 def server_settings(tmp_path):
     from app.settings import ServerSettings

@@ -2,8 +2,6 @@
 close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as messages."""
 from __future__ import annotations
 
-import io
-
 import numpy as np
 import pytest
 
@@ -13,9 +11,9 @@ from app.map_jobs import MapRegistry
 
 
 @pytest.fixture
-def dash(server_settings):
+def dash(server_settings, analysis_pool):
     reg = MapRegistry(server_settings)
-    d = Dashboard(server_settings, registry=reg)
+    d = Dashboard(server_settings, registry=reg, pool=analysis_pool)
     d.controls.param.update(map_columns=2, map_coarse=3)
     yield d
     d.close()

@@ -4,8 +4,6 @@ from __future__ import annotations
 
 import time
 
-import pytest
-
 from amra_core.boundary import MapSpec, run_map
 from app.map_jobs import MapRegistry, get_registry
 

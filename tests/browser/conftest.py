@@ -96,7 +96,8 @@ def dashboard_server(tmp_path_factory):
 
     port = _free_port()
     server = pn.serve(app, port=port, address="127.0.0.1", websocket_origin=f"127.0.0.1:{port}",
-                      threaded=True, show=False, verbose=False)
+                      threaded=True, show=False, verbose=False,
+                      check_unused_sessions_milliseconds=1000, unused_session_lifetime_milliseconds=5000)
     url = f"http://127.0.0.1:{port}/"
     try:
         _wait_for_http(url)
