@@ -27,6 +27,13 @@ class RotorError(ValueError):
     """A rotor description is invalid. The message names field, value and allowed range."""
 
 
+def _short(v):
+    """A long list shown by its start and its length in messages."""
+    if isinstance(v, (list, tuple)) and len(v) > 12:
+        return f"[{', '.join(repr(x) for x in list(v)[:4])}, ... ({len(v)} values)]"
+    return list(v) if isinstance(v, tuple) else v
+
+
 def _fail(name: str, value, allowed: str):
     raise RotorError(f"{name} = {value!r} is not allowed: {allowed}")
 
@@ -100,6 +107,8 @@ class BladeStations:
             raw = getattr(self, name)
             if isinstance(raw, (int, float)):
                 _fail(f"stations.{name}", raw, "must be a list with one value per station")
+            if n is not None and len(raw) != n:  # before looking at (possibly very many) values
+                _fail(f"stations.{name}", _short(raw), f"must have {n} values, one per station (as r_m)")
             vals = tuple(
                 _check_number(f"stations.{name}[{i}]", v, lo, hi, lo_open) for i, v in enumerate(raw)
             )
