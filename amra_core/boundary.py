@@ -16,8 +16,10 @@ in-process serial executor (``workers=1``) the cells of a column are handed out 
 found, with a pool when the column is finished. ``on_cell``/:func:`iter_map` hand out every cell;
 a ``threading.Event`` ``cancel`` is checked between cells (and at least every 0.1 s) and a
 cancelled map returns what it has. With a :class:`~amra_core.store.CellStore`, finished columns are
-kept (each cell under its case key as before, plus a column record listing the walk's GJ values
-and intervals); a repeated map is read back at once. A column whose worker crashed
+kept (each cell under its case key as before; the cell at ``gj_max`` also carries the column record:
+the walk's GJ values and intervals), so a repeated map is read back at once; an interrupted map
+resumes with the columns it had not finished (a column walk restarts from its top: continuation needs
+the trimmed states, which the store does not keep). A column whose worker crashed
 (``Outcome.ok`` False) or that contains a failed cell is never stored: it is shown as failed in
 that run only.
 
@@ -535,12 +537,16 @@ class MapRun:
         return self.done - partial + sum(max(CELLS_PER_COLUMN_GUESS, len(self.by_col[cg]) + 1) for cg in open_cols)
 
     def _cached_column(self, cg) -> Optional[ColumnResult]:
+        """A finished column from the store: its record rides on the cell at ``gj_max`` (always part
+        of a walk), so the store holds one row per cell; None if absent or for another range/tolerance."""
         if self.store is None:
             return None
-        rec = self.store.get(self.spec.column_key(cg))
-        if rec is None:
+        spec = self.spec
+        top = self.store.get(spec.key(cg, _gj_round(spec.gj_max)))
+        rec = None if top is None else top.get("column")
+        if not isinstance(rec, dict) or rec.get("key") != spec.column_key(cg):
             return None
-        keys = [self.spec.key(cg, g) for g in rec.get("gj", [])]
+        keys = [spec.key(cg, g) for g in rec.get("gj", [])]
         got = self.store.get_many(keys) if hasattr(self.store, "get_many") else {k: self.store.get(k) for k in keys}
         if not keys or any(got.get(k) is None for k in keys):
             return None
@@ -553,14 +559,20 @@ class MapRun:
         if self.store is None or col.failed or col.cancelled:
             return
         spec = self.spec
-        for c in col.cells:
+        top_gj = _gj_round(spec.gj_max)
+        crit = "inf" if col.critical_gj is not None and math.isinf(col.critical_gj) else col.critical_gj
+        record = {"key": spec.column_key(col.cg), "gj": [c.gj_nm2 for c in col.cells], "intervals": col.intervals,
+                  "critical_gj": crit, "fold_gj": col.fold_gj}
+        top = None
+        for c in col.cells:  # the top cell last: its column record says the column is complete
+            if c.gj_nm2 == top_gj:
+                top = c
+                continue
             self._put(spec.key(col.cg, c.gj_nm2), spec.case_params(col.cg, c.gj_nm2), c)
             if self.store is None:
                 return
-        crit = "inf" if col.critical_gj is not None and math.isinf(col.critical_gj) else col.critical_gj
-        self._put(spec.column_key(col.cg), spec.column_params(col.cg),
-                  {"gj": [c.gj_nm2 for c in col.cells], "intervals": col.intervals, "critical_gj": crit,
-                   "fold_gj": col.fold_gj})
+        if top is not None:
+            self._put(spec.key(col.cg, top_gj), spec.case_params(col.cg, top_gj), {**top.to_dict(), "column": record})
 
     def _finish_column(self, col: ColumnResult, cached: bool, streamed: bool):
         """Record a finished column; yields the cells not handed out yet."""

@@ -162,8 +162,14 @@ class _Walker:
         self._check_cancel()
         self.n_trims += 1
         if not self.axial:  # periodic trim continued from a's orbit (Broyden-updated Jacobian)
+            tr = self.periodic.step(self.model(gj), a.trim, None if b is None else b.trim, s)
+            if on_branch(tr, a.trim, None if b is None else b.trim, s):
+                return tr
+            if b is None:
+                return None
+            self.n_trims += 1  # the secant may overshoot near a fold: one more try from a alone
             tr = self.periodic.step(self.model(gj), a.trim)
-            return tr if on_branch(tr, a.trim, None if b is None else b.trim, s) else None
+            return tr if on_branch(tr, a.trim, None, 0.0) else None
         tr = continue_to(self.model(gj), None, a.trim, None if b is None else b.trim, s)
         if on_branch(tr, a.trim, None if b is None else b.trim, s):
             return tr
@@ -200,8 +206,15 @@ class _Walker:
     def _sign(p: BranchPoint) -> Optional[bool]:
         return None if not math.isfinite(p.max_real_part_per_s) else p.max_real_part_per_s >= UNSTABLE_REAL_PART
 
+    @staticmethod
+    def _cls(p: BranchPoint) -> Optional[str]:
+        """The class compared along a segment: stable | flutter | windmill-brake (None: failed)."""
+        k = p.kind
+        return None if k in ("failed", "fold") else k
+
     def bisect(self, hi: BranchPoint, lo: BranchPoint) -> None:
-        """Bracket the stability change between ``hi`` and ``lo`` (same branch segment) to rel_tol."""
+        """Bracket the change of class (stability, or the crossing of V_c/v_h = -2) between ``hi`` and
+        ``lo`` (same branch segment) to rel_tol."""
         while math.log(hi.gj_nm2 / lo.gj_nm2) > self.h_min * (1 + 1e-9):
             t = 0.5
             gj = math.sqrt(hi.gj_nm2 * lo.gj_nm2)
@@ -212,10 +225,10 @@ class _Walker:
                 self.unresolved.add((lo.gj_nm2, hi.gj_nm2))
                 return
             mid = self.add(gj, tr)
-            if self._sign(mid) is None:
+            if self._cls(mid) is None:
                 self.unresolved.add((lo.gj_nm2, hi.gj_nm2))
                 return
-            if self._sign(mid) == self._sign(hi):
+            if self._cls(mid) == self._cls(hi):
                 hi = mid
             else:
                 lo = mid
@@ -244,7 +257,8 @@ class _Walker:
                 continue
             p = self.add(gj, tr)
             sa, sb = self._sign(prev), self._sign(p)
-            if sa is not None and sb is not None and sa != sb:
+            ca, cb = self._cls(prev), self._cls(p)
+            if ca is not None and cb is not None and ca != cb:
                 hi_, lo_ = (prev, p) if direction < 0 else (p, prev)
                 self.bisect(hi_, lo_)
             h_next = min(1.5 * h, self.h_max)

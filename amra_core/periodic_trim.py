@@ -60,11 +60,15 @@ class PeriodicContinuation:
             J[:, k] = (rp - res) / _FD[k]
         return J
 
-    def step(self, model: CompiledModel, prev: TrimResult, max_iter: int = 14) -> TrimResult:
+    def step(self, model: CompiledModel, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0,
+             max_iter: int = 14) -> TrimResult:
         """The free-autorotation forward trim of ``model`` continued from ``prev`` (a trim of a
-        neighbouring model). ``no-autorotation`` when it does not converge."""
+        neighbouring model; with ``prev2`` the rotor speed, descent rate and tilt start from the secant
+        ``prev + s (prev - prev2)``). ``no-autorotation`` when it does not converge."""
         y = transfer_state(prev.state, prev.model, model)
         z = np.array([prev.omega_rad_s, prev.descent_rate_m_s, prev.disk_tilt_rad])
+        if prev2 is not None and s:
+            z = z + s * (z - np.array([prev2.omega_rad_s, prev2.descent_rate_m_s, prev2.disk_tilt_rad]))
         dt = stable_time_step(model, z[0])
         try:
             y, res, avg, last = self._evaluate(model, y, z, 6, dt)

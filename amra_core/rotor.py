@@ -11,6 +11,7 @@ and CG overrides that the dashboard sliders set.
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field, replace, asdict
 from typing import Optional
@@ -248,7 +249,14 @@ class Rotor:
             i, need = self.stations.inertia_violation(x_ea=ea, x_cg=cg)
             if i is not None:
                 raise RotorError(inertia_message(self.stations, i, need, x_ea=ea, x_cg=cg))
-        return replace(self, stations=replace(self.stations, **changes))
+        # fast path (map keys build thousands of these): the unchanged fields were validated when
+        # this rotor was built and the changed ones just now, so copy instead of re-validating all
+        stations = copy.copy(self.stations)
+        for k, v in changes.items():
+            object.__setattr__(stations, k, v)
+        out = copy.copy(self)
+        object.__setattr__(out, "stations", stations)
+        return out
 
     def to_dict(self) -> dict:
         """The resolved rotor as the solver uses it (SI, chord fractions, root to tip)."""

@@ -286,6 +286,11 @@ def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
         why = res.trim.reason + (f" (branch ended at mean GJ {be['gj_mean_nm2']:.0f} N m^2/rad)" if be else "")
         verdict = "overspeed" if be.get("runaway") == "overspeed" else "no-autorotation"
         return CellResult(cg, gj, verdict, False, "fold", None, None, None, why, "none")
+    if res.trim.branch == "windmill-brake":  # an equilibrium, but not autorotation: never stable
+        return CellResult(cg, gj, "windmill-brake", False, "windmill-brake", None, None, res.trim.omega_rad_s,
+                          f"equilibrium on the windmill-brake side: descent rate {res.trim.descent_rate_m_s:.1f} m/s "
+                          f"({res.trim.descent_ratio:.2f} v_h), not autorotation", "windmill-brake",
+                          float(res.trim.descent_rate_m_s))
     return cell_from_modes(cg, gj, res.trim, res.modes)
 
 

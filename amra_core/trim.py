@@ -94,11 +94,10 @@ def _hover_induced(model: CompiledModel) -> float:
     return math.sqrt(r.vehicle_mass_kg * model.flight.gravity_m_s2 / (2 * model.flight.density_kg_m3 * r.disc_area_m2))
 
 
-#: an equilibrium descending faster than this many hover induced velocities is on the windmill-brake
-#: side, not autorotation: beyond the turbulent-wake region (V_c/v_h < -2) and its blend into momentum
-#: theory (``kernels.EMP_BLEND``), so a state inside the blend, where the inflow model is still the
-#: empirical curve's, is not labelled windmill-brake
-WINDMILL_BRAKE_RATIO = 2.0 + kernels.EMP_BLEND
+#: an equilibrium descending faster than this many hover induced velocities (V_c/v_h < -2, beyond the
+#: turbulent-wake region of the empirical inflow curve) is on the windmill-brake side, not autorotation
+#: (the same limit as :data:`amra_core.verdict.WINDMILL_BRAKE_RATIO` for simulated runs)
+WINDMILL_BRAKE_RATIO = 2.0
 
 
 def branch_of(model: CompiledModel, descent_rate_m_s: float) -> str:
@@ -126,18 +125,21 @@ def trim_axial(model: CompiledModel, guess: Optional[np.ndarray] = None, omega_h
             return res
     vh = _hover_induced(model)
     res = None
-    for ratio in (1.91, 1.85, 1.97, 2.3, 2.8, 3.5):
-        y0 = np.zeros(model.n_y) if guess is None else guess.copy()
-        y0[Y_OMEGA] = omega_hold or (omega_guess(model) if guess is None else guess[Y_OMEGA])
-        y0[Y_VD] = ratio * vh
-        y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
-        res = _trim_axial_from(model, y0, omega_hold)
-        if res.ok:
-            return res
+    for fallback in (False, True):  # the jitted Newton from every start first; scipy's hybr only if none converges
+        for ratio in (1.91, 1.85, 1.97, 2.3, 2.8, 3.5):
+            y0 = np.zeros(model.n_y) if guess is None else guess.copy()
+            y0[Y_OMEGA] = omega_hold or (omega_guess(model) if guess is None else guess[Y_OMEGA])
+            y0[Y_VD] = ratio * vh
+            y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
+            res = _trim_axial_from(model, y0, omega_hold, fallback)
+            if res.ok:
+                return res
     return res
 
 
-def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[float]) -> TrimResult:
+def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[float],
+                     fallback: bool = True) -> TrimResult:
+    """The axial trim from ``y0``: the jitted Newton, then (``fallback``) scipy's hybr if it fails."""
     m = model.with_controls(alpha_s_rad=0.0, airspeed_m_s=0.0, quasi_static=True,
                             hold_omega=omega_hold is not None, hold_vd=False)
     a = m.arrays
@@ -172,6 +174,9 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
     y = _newton_axial(m, y0, free_omega)  # jitted Newton first; scipy's hybr where it does not converge
     if y is not None:
         ok = True
+    elif not fallback:
+        return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
+                          model=model)
     else:
         sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
         y = unpack(sol.x)
@@ -476,9 +481,11 @@ def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: Com
 
 def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
     """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
-    class, tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within
-    ``STEP_*`` of the secant prediction. A False here means: halve the step (or a fold)."""
-    if not _plausible(res, None) or res.branch != prev.branch:
+    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
+    the secant prediction. A False here means: halve the step (or a fold). The branch may move
+    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
+    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
+    if not _plausible(res, None):
         return False
     vh = _hover_induced(res.model)
     x1 = _trim_scalars(prev)
@@ -648,15 +655,16 @@ def windmill_brake_state(model: CompiledModel, hold=None) -> Optional[TrimResult
     if not model.flight.is_axial:
         return None
     vh = _hover_induced(model)
-    for ratio in (2.8, 3.5, 4.5, 6.0):
-        y0 = np.zeros(model.n_y)
-        y0[Y_OMEGA] = hold or omega_guess(model)
-        y0[Y_VD] = ratio * vh
-        y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
-        try:
-            res = _trim_axial_from(model, y0, hold)
-        except FloatingPointError:
-            continue
-        if _plausible(res, None) and res.branch == "windmill-brake":
-            return res
+    for fallback in (False, True):
+        for ratio in (2.8, 3.5, 4.5, 6.0):
+            y0 = np.zeros(model.n_y)
+            y0[Y_OMEGA] = hold or omega_guess(model)
+            y0[Y_VD] = ratio * vh
+            y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
+            try:
+                res = _trim_axial_from(model, y0, hold, fallback)
+            except FloatingPointError:
+                continue
+            if _plausible(res, None) and res.branch == "windmill-brake":
+                return res
     return None
