@@ -41,10 +41,13 @@ _MAX_VALIDATED = 16
 _LOCK = threading.Lock()  # kernels release the GIL: Panel sessions and thread pools call in parallel
 
 
+_F64 = np.dtype(np.float64)
+
+
 def _float_array(name: str, a, ndim: int) -> np.ndarray:
     if not isinstance(a, np.ndarray):
         raise KernelShapeError(f"{name} must be a numpy array, got {type(a).__name__}")
-    if a.dtype != np.float64:
+    if a.dtype is not _F64 and a.dtype != _F64:
         raise KernelShapeError(f"{name} must be float64, got {a.dtype}")
     if a.ndim != ndim:
         raise KernelShapeError(f"{name} must have {ndim} dimension(s), got shape {a.shape}")
@@ -52,19 +55,21 @@ def _float_array(name: str, a, ndim: int) -> np.ndarray:
 
 
 def _shape(name: str, a, shape: tuple) -> None:
+    if isinstance(a, np.ndarray) and a.shape == shape and (a.dtype is _F64 or a.dtype == _F64):
+        return  # the common case, fast
     _float_array(name, a, len(shape))
-    if a.shape != shape:
-        raise KernelShapeError(f"{name} has shape {a.shape}, expected {shape}")
+    raise KernelShapeError(f"{name} has shape {a.shape}, expected {shape}")
 
 
 def _counts(m: ModelArrays):
     p = m.p
     _shape("ModelArrays.p", p, (N_P,))
-    ns_f, nst_f = p[P_NS], p[P_NST]
-    for name, v in (("p[P_NS] (structural coordinates)", ns_f), ("p[P_NST] (stations)", nst_f)):
-        if not (math.isfinite(v) and v >= 1 and v == int(v)):
-            raise KernelShapeError(f"ModelArrays.{name} = {v!r} must be a positive whole number")
-    return int(ns_f), int(nst_f), bool(p[P_INFLOW3] > 0.5)
+    ns_f, nst_f, in3 = p.item(P_NS), p.item(P_NST), p.item(P_INFLOW3)
+    if not (1.0 <= ns_f < 1e9 and ns_f == int(ns_f)):  # NaN fails the range test
+        raise KernelShapeError(f"ModelArrays.p[P_NS] (structural coordinates) = {ns_f!r} must be a positive whole number")
+    if not (1.0 <= nst_f < 1e9 and nst_f == int(nst_f)):
+        raise KernelShapeError(f"ModelArrays.p[P_NST] (stations) = {nst_f!r} must be a positive whole number")
+    return int(ns_f), int(nst_f), in3 > 0.5
 
 
 def check_model_arrays(m: ModelArrays) -> tuple:
@@ -75,8 +80,12 @@ def check_model_arrays(m: ModelArrays) -> tuple:
     with _LOCK:
         hit = _VALIDATED.get(id(m))
     if hit is None or hit[0] is not m or hit[1:] != (ns, nst, inflow3):
-        for name in ("minv", "k0", "k2", "c"):
+        for name in ("minv", "k0", "k2", "c", "gyh", "ugyh"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (ns, ns))
+        for name in ("sf", "gy0", "ugy0"):
+            _shape(f"ModelArrays.{name}", getattr(m, name), (ns,))
+        for name in ("ls2", "li2"):
+            _shape(f"ModelArrays.{name}", getattr(m, name), (2, ns, ns))
         _shape("ModelArrays.st", m.st, (nst, N_S_COLS))
         for name in ("shw", "shd", "sht"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (2, nst, ns))

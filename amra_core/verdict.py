@@ -7,7 +7,7 @@ motion). Their envelope (the maximum per window of one revolution, or 0.2 s) is 
 squares in log scale: the slope is the growth rate [1/s].
 
 Runs without a trim (started from a branch end, model-notes §7) are judged by where the rotor goes:
-into the windmill-brake state (descent beyond 2 v_h) or still falling at the end: ``no-autorotation``;
+into the windmill-brake state (axial flight, descent beyond 2 v_h) or still falling at the end: ``no-autorotation``;
 settled at another rotor speed: the motion after it settled is judged as a trimmed run's would be
 (the explanation says where it settled); still moving otherwise: ``undetermined`` (run longer).
 No data, or too little for the envelope fit: ``undetermined`` with the reason, never ``stable``.
@@ -20,11 +20,14 @@ from typing import Optional
 
 import numpy as np
 
+from .kernels import EMP_BLEND
+
 #: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
 #: says which and how long a run is needed); neither stable nor unstable, never counted as either
-#: ``windmill-brake``: the run starts and stays on the windmill-brake side (descent rate beyond the
-#: turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8 §2);
-#: a run that starts in normal autorotation and ends there is ``no-autorotation``
+#: ``windmill-brake``: an axial run starts and stays on the windmill-brake side (descent rate beyond
+#: the turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8
+#: §2), so counted with the unstable verdicts; an untrimmed axial run that ends there is
+#: ``no-autorotation``
 VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake", "numerical-failure",
             "undetermined")
 UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake")
@@ -33,9 +36,10 @@ UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation", "windmill-b
 GROWTH_THRESHOLD_PER_S = 0.02
 #: oscillation frequencies below this [Hz] count as monotonic (divergence), not flutter
 MIN_FLUTTER_HZ = 0.3
-#: descent ratio V_c / v_h below which the rotor is in the windmill-brake state (the end of the
-#: turbulent-wake region of the empirical inflow curve, :data:`amra_core.kernels.EMP_K`)
-WINDMILL_BRAKE_RATIO = -2.0
+#: descent rate / v_h beyond which the rotor is in the windmill-brake state: the end of the
+#: turbulent-wake region of the empirical inflow curve (V_c/v_h = -2) and its blend into momentum
+#: theory, the same bound as :data:`amra_core.trim.WINDMILL_BRAKE_RATIO`
+WINDMILL_BRAKE_RATIO = 2.0 + EMP_BLEND
 
 
 @dataclass
@@ -116,6 +120,18 @@ def _dominant_frequency(t, d):
     return float(f[int(np.argmax(spec))])
 
 
+def _windmill_brake(h, cols, t, window, v_h):
+    """(descent rate at the start, mean over the last window [m/s], that mean / v_h) if the run
+    ends on the windmill-brake side (descent beyond WINDMILL_BRAKE_RATIO v_h), else None."""
+    if not v_h or len(t) < 2:
+        return None
+    vd = h[:, cols["descent_rate_m_s"]]
+    vd_end = float(np.mean(vd[t >= t[-1] - window]))
+    if vd_end / v_h <= WINDMILL_BRAKE_RATIO:
+        return None
+    return float(vd[0]), vd_end, vd_end / v_h
+
+
 def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
     """Where the rotor speed of a run that left its start ends up: ``("settled", first row index,
     mean rotor speed)`` when the window-averaged rotor speed over the last third of the run (at
@@ -182,23 +198,15 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            "no torque equilibrium exists: the rotor speed decayed from the start")
         return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
-    if hover_induced_m_s and len(t) >= 2 and collapse is None and status != "rotor-stopped":
-        vd = h[:, cols["descent_rate_m_s"]]
-        tail = vd[t >= t[-1] - window]
-        x_end = -float(np.mean(tail)) / hover_induced_m_s
-        x_start = -float(vd[0]) / hover_induced_m_s
-        if x_end < WINDMILL_BRAKE_RATIO:
-            if x_start < WINDMILL_BRAKE_RATIO:
-                return Verdict("windmill-brake", growth, freq, None, amp_end,
-                               f"the rotor started and stayed in the windmill-brake state: descent rate "
-                               f"{np.mean(tail):.1f} m/s = {-x_end:.1f} v_h (beyond the turbulent-wake region, "
-                               f"V_c/v_h < {WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
-            if not trimmed:  # a trimmed run that ends there is judged by its instability below
-                return Verdict("no-autorotation", growth, freq, None, amp_end,
-                               f"normal autorotation was lost: the descent rate rose from {vd[0]:.1f} to "
-                               f"{np.mean(tail):.1f} m/s = {-x_end:.1f} v_h, the windmill-brake state (V_c/v_h < "
-                               f"{WINDMILL_BRAKE_RATIO:g}), while the rotor speed went from {om[0]:.1f} to "
-                               f"{om[-1]:.1f} rad/s")
+    # axial flight only: in forward flight the mass flow is set by the airspeed, and a descent
+    # rate of a few v_h is an ordinary glide (15 m/s at 80 m/s airspeed is an 11 deg path)
+    wb = _windmill_brake(h, cols, t, window, hover_induced_m_s) if axial else None
+    if wb is not None and not trimmed and collapse is None and status != "rotor-stopped":
+        vd0, vd_end, x_end = wb
+        return Verdict("no-autorotation", growth, freq, None, amp_end,
+                       f"normal autorotation was lost: the descent rate rose from {vd0:.1f} to {vd_end:.1f} m/s "
+                       f"= {x_end:.1f} v_h, the windmill-brake state (V_c/v_h < -{WINDMILL_BRAKE_RATIO:g}), while "
+                       f"the rotor speed went from {om[0]:.1f} to {om[-1]:.1f} rad/s")
     if not trimmed:
         drift = (om[0] - om[-1]) / omega_ref
         state = _settle_state(t, om, window) if abs(drift) > 0.05 else ("none",)
@@ -238,4 +246,9 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
         if growth <= GROWTH_THRESHOLD_PER_S:
             why = "saturated into a limit cycle 20x larger than the perturbation"
         return Verdict(kind, growth, freq, collapse, amp_end, why)
+    if wb is not None and -wb[0] / hover_induced_m_s < -WINDMILL_BRAKE_RATIO:
+        return Verdict("windmill-brake", growth, freq, None, amp_end,
+                       f"the perturbation decays, but about an equilibrium on the windmill-brake side: descent "
+                       f"rate {wb[1]:.1f} m/s = {wb[2]:.1f} v_h (beyond the turbulent-wake region, V_c/v_h < "
+                       f"-{WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
     return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays")

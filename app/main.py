@@ -1,57 +1,53 @@
-"""AMRA dashboard entry point (placeholder).
+"""AMRA dashboard entry point: ``panel serve app/main.py --setup app/warmup.py`` (``amra serve``).
 
-Served with ``panel serve app/main.py`` (see ``scripts/dashboard.sh``). Panel runs
-this script once per browser session, and everything is built inside
-:func:`create_app`, so no state is shared between sessions. This placeholder does
-not import :mod:`amra_core`.
+Panel runs this script once per browser session; :func:`create_app` builds that session's
+objects (controls, run worker, buffer, views) and registers their clean-up. Server-wide state
+(the map registry) lives in ``pn.state.cache``; there are no mutable module globals.
 """
-
 from __future__ import annotations
 
+import holoviews as hv
 import panel as pn
 
-TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
+from app.dashboard import Dashboard
+from app.layout import TITLE
+from app.map_jobs import get_registry
+from app.settings import ServerSettings
+from app.url_sync import apply_session_query, sync_url
 
-_INTRO = """
-## Dashboard coming soon
-
-AMRA is an open, browser-based aeroelastic simulator for two-bladed teetering
-autogyro rotors in autorotation, re-implementing Trchalík, Gillies & Thomson (2008),
-*Development of an aeroelastic stability boundary for a rotor in autorotation*.
-
-The interactive dashboard is being built. It will offer:
-
-- sliders for the blade's torsional stiffness **GJ**, axial stiffness **EA**,
-  chordwise **CG** position, the **advance ratio** and the model **fidelity**;
-- **streaming time histories** of the blade response and rotor speed while a
-  simulation runs;
-- a **stability boundary map** built from many runs.
-
-Meanwhile the solver can be used from the command line:
-
-```
-amra rotor    --preset mccutcheon --json
-amra modes    --preset mccutcheon --json
-amra trim     --preset mccutcheon --json
-amra simulate --preset paper-boundary --gj 100 --json
-amra bench
-```
-"""
+__all__ = ["TITLE", "create_app"]
 
 
-def create_app() -> pn.template.FastListTemplate:
-    """Build a fresh page for one session."""
-    intro = pn.pane.Markdown(_INTRO, sizing_mode="stretch_width", name="intro")
-    return pn.template.FastListTemplate(
-        title=TITLE,
-        main=[intro],
-        main_max_width="900px",
-    )
+def serve_resources_locally() -> None:
+    """Bokeh and Panel JS/CSS from this server, never a CDN: the page must work offline."""
+    from bokeh.settings import settings
+    settings.resources.set_value("server")
+
+
+def create_app():
+    """Build a fresh page for one session (needs a server session for URL sync and the pump)."""
+    serve_resources_locally()
+    pn.extension(notifications=True, throttled=True)
+    hv.extension("bokeh", logo=False)
+    settings = ServerSettings.from_env()
+    dash = Dashboard(settings, registry=get_registry(settings))
+    page = dash.__panel__()
+    if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
+        apply_session_query(dash.controls, dash.notify)
+        dash.start_periodic()
+
+        def loaded():  # after the first paint
+            sync_url(dash.controls)
+            dash.refresh_analyses()
+        pn.state.onload(loaded)
+        pn.state.on_session_destroyed(dash.close)
+    else:
+        dash.refresh_analyses()
+    page.dashboard = dash  # handle for tests and the benchmark
+    return page
 
 
 if __name__.startswith("bokeh"):
-    # Run by ``panel serve app/main.py``: one new page per session.
-    create_app().servable()
+    create_app().servable(title=TITLE)
 elif __name__ == "__main__":
-    # ``python app/main.py``: same page via a dynamic server.
     pn.serve(create_app, port=5006, address="127.0.0.1", show=False)

@@ -78,7 +78,8 @@ def _spec(args):
     from ..rotor_io import load_rotor_file
     a, b, n = args.cg
     cgs = tuple(float(x) for x in np.linspace(a, b, n)) if n > 1 else (a,)
-    rotor = load_rotor_file(args.rotor) if args.rotor else (args.preset or "paper-boundary")
+    rotor = (load_rotor_file(args.rotor) if args.rotor is not None
+             else ("paper-boundary" if args.preset is None else args.preset))
     from ..rotor_io import load_preset
     base = load_preset(rotor) if isinstance(rotor, str) else rotor  # a bad preset name fails here
     for cg in cgs:  # every column must be a physical section with this EA (torsional inertia bound)

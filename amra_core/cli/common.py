@@ -52,7 +52,8 @@ def flight_args(p):
 
 def load_rotor(args):
     from ..rotor_io import load_preset, load_rotor_file
-    rotor = load_rotor_file(args.rotor) if args.rotor else load_preset(args.preset or "mccutcheon")
+    rotor = (load_rotor_file(args.rotor) if args.rotor is not None
+             else load_preset("mccutcheon" if args.preset is None else args.preset))
     if hasattr(args, "gj"):
         rotor = rotor.with_overrides(gj_nm2=args.gj, x_ea=args.ea, x_cg=args.cg)
     return rotor

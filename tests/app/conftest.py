@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import pytest
 
 pn = pytest.importorskip("panel")
@@ -11,4 +13,36 @@ pn = pytest.importorskip("panel")
 def _reset_panel_state():
     """Panel keeps process-wide state (caches, sessions); clear it after each test."""
     yield
+    reg = pn.state.cache.pop("amra-map-registry", None)
+    if reg is not None:
+        reg.close()
     pn.state.reset()
+
+
+@pytest.fixture(scope="session")
+def analysis_pool():
+    """One analysis process for the whole test session (spawning one costs seconds)."""
+    from app.background import AnalysisPool
+    pool = AnalysisPool()
+    yield pool
+    pool.close()
+
+
+@pytest.fixture
+def server_settings(tmp_path):
+    from app.settings import ServerSettings
+    return ServerSettings(store_path=tmp_path / "cells.sqlite", map_workers=1, max_run_s=30.0)
+
+
+def wait_until(predicate, timeout_s=30.0, every_s=0.02, what="condition"):
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what}")
+        time.sleep(every_s)
+
+
+@pytest.fixture
+def wait():
+    """``wait(predicate, timeout_s, what=...)``: poll until true, else fail."""
+    return wait_until

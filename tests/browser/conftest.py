@@ -2,10 +2,13 @@
 
 ``playwright install`` cannot download its own browser builds on our machines, so
 the launch is pointed at the system Chromium (``scripts/test.sh`` apt-installs it).
+The dashboard is served in-process with ``pn.serve`` (warmed like ``--setup app/warmup.py``),
+with its own temporary SQLite store. Screenshots go to ``test-results/screenshots/``.
 """
 
 from __future__ import annotations
 
+import os
 import socket
 import time
 import urllib.request
@@ -22,6 +25,7 @@ CHROMIUM_ARGS = [
     "--no-first-run",
     "--disable-sync",
 ]
+SCREENSHOTS = Path(__file__).resolve().parents[2] / "test-results" / "screenshots"
 
 
 def pytest_collection_modifyitems(config, items):
@@ -42,17 +46,22 @@ def browser_type_launch_args(browser_type_launch_args):
     }
 
 
+@pytest.fixture(scope="session")
+def browser_context_args(browser_context_args):
+    return {**browser_context_args, "viewport": {"width": 1500, "height": 1000}}
+
+
 def _free_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
         sock.bind(("127.0.0.1", 0))
         return sock.getsockname()[1]
 
 
-def _wait_for_http(url: str, timeout: float = 30.0) -> None:
+def _wait_for_http(url: str, timeout: float = 60.0) -> None:
     deadline = time.monotonic() + timeout
     while True:
         try:
-            with urllib.request.urlopen(url, timeout=5) as response:
+            with urllib.request.urlopen(url, timeout=30) as response:
                 if response.status == 200:
                     return
         except OSError:
@@ -62,27 +71,71 @@ def _wait_for_http(url: str, timeout: float = 30.0) -> None:
         time.sleep(0.2)
 
 
-@pytest.fixture
-def dashboard_url():
-    """Serve ``app.main.create_app`` on a free loopback port; yield its URL."""
+@pytest.fixture(scope="session")
+def dashboard_server(tmp_path_factory):
+    """Serve ``app.main.create_app`` on a free loopback port (one server for the session); yield
+    ``(url, sessions)`` where ``sessions`` lists the per-session Dashboard objects."""
     import panel as pn
 
+    store = tmp_path_factory.mktemp("store") / "cells.sqlite"
+    old = os.environ.get("AMRA_STORE")
+    os.environ["AMRA_STORE"] = str(store)
     from app.main import create_app
+    from app.map_jobs import get_registry
+    from app.settings import ServerSettings
+    from app.warmup import warm
+
+    warm()
+    registry = get_registry(ServerSettings.from_env())
+    sessions = []
+
+    def app():
+        page = create_app()
+        sessions.append(page.dashboard)
+        return page
 
     port = _free_port()
-    server = pn.serve(
-        create_app,
-        port=port,
-        address="127.0.0.1",
-        websocket_origin=f"127.0.0.1:{port}",
-        threaded=True,
-        show=False,
-        verbose=False,
-    )
+    server = pn.serve(app, port=port, address="127.0.0.1", websocket_origin=f"127.0.0.1:{port}",
+                      threaded=True, show=False, verbose=False,
+                      check_unused_sessions_milliseconds=1000, unused_session_lifetime_milliseconds=5000)
     url = f"http://127.0.0.1:{port}/"
     try:
         _wait_for_http(url)
-        yield url
+        yield url, sessions
     finally:
         server.stop()
         server.join(timeout=30)
+        registry.close()
+        pn.state.cache.pop("amra-map-registry", None)
+        if old is None:
+            os.environ.pop("AMRA_STORE", None)
+        else:
+            os.environ["AMRA_STORE"] = old
+
+
+@pytest.fixture
+def dashboard_url(dashboard_server):
+    return dashboard_server[0]
+
+
+@pytest.fixture
+def watched_page(page):
+    """The Playwright page with its console errors and outside requests recorded."""
+    page.amra_errors = []
+    page.amra_outside = []
+    page.on("console", lambda m: m.type == "error" and page.amra_errors.append(m.text))
+    page.on("pageerror", lambda e: page.amra_errors.append(str(e)))
+
+    def on_request(req):
+        host = req.url.split("/")[2] if "://" in req.url else ""
+        if req.url.startswith(("http://", "https://", "ws://", "wss://")) and not host.startswith(("127.0.0.1", "localhost")):
+            page.amra_outside.append(req.url)
+    page.on("request", on_request)
+    return page
+
+
+def shot(page, name: str) -> Path:
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    path = SCREENSHOTS / f"{name}.png"
+    page.screenshot(path=str(path), full_page=True)
+    return path

@@ -3,8 +3,9 @@ process killed or terminated, its store on a read-only mount, two writers on one
 row -- must end in the same map as an uninterrupted run, and never leave a wrong cell in the store
 or orphaned worker processes behind.
 
-Every case runs the real CLI (``python -m amra_core.cli boundary``) on a small rigid axial map (4 CG
-columns, 4 coarse GJ values: ~40 cells, a few seconds). Each case writes a row (case, finished,
+Every case runs the real CLI (``python -m amra_core.cli boundary``) on a small rigid axial map (3 CG
+columns, GJ 100-1500 to 20 %: ~25 cells, seconds on an idle machine). The map engine stores a
+column when it is finished, so the faults strike while at least one column is still running. Each case writes a row (case, finished,
 identical map, message) to ``faults.json`` in the report folder (:func:`report_dir`).
 """
 from __future__ import annotations
@@ -25,7 +26,7 @@ from report_helpers import record_fault
 
 REPO = Path(__file__).resolve().parents[2]
 MAP = ["boundary", "--preset", "paper-boundary", "--fidelity", "rigid", "--mu", "0", "--ea", "0.32",
-       "--cg", "0.30:0.48:4", "--coarse", "4", "--tol", "0.05", "--json", "--quiet"]
+       "--cg", "0.36:0.48:3", "--coarse", "3", "--tol", "0.2", "--gj", "100:1500", "--json", "--quiet"]
 COMPARED = ("critical_gj", "columns", "boundaries", "cells")
 
 pytestmark = [
@@ -64,11 +65,15 @@ def reference():
     return {k: d[k] for k in COMPARED}
 
 
-def stored_rows(path) -> int:
+def stored_rows(path, columns=False, cells=False) -> int:
+    """Rows in the store; ``columns``: only those carrying a finished column's record (the map
+    engine's unit); ``cells``: only cell results (rows with a verdict)."""
+    where = (" WHERE result LIKE '%\"intervals\"%'" if columns else
+             " WHERE result LIKE '%\"verdict\"%'" if cells else "")
     try:
         conn = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=5)
         try:
-            return conn.execute("SELECT count(*) FROM cells").fetchone()[0]
+            return conn.execute("SELECT count(*) FROM cells" + where).fetchone()[0]
         finally:
             conn.close()
     except sqlite3.Error:
@@ -78,7 +83,7 @@ def stored_rows(path) -> int:
 def wait_rows(path, n, proc, timeout=120):
     t_end = time.monotonic() + timeout
     while time.monotonic() < t_end:
-        if stored_rows(path) >= n:
+        if stored_rows(path, columns=True) >= n:
             return True
         if proc.poll() is not None:
             return False
@@ -127,8 +132,8 @@ def wait_gone(pids, timeout=15.0) -> list[int]:
 def no_worker_deaths_stored(path) -> bool:
     conn = sqlite3.connect(path)
     try:
-        return all("worker" not in json.loads(r)["reason"].lower() and json.loads(r)["verdict"] != "failed"
-                   for (r,) in conn.execute("SELECT result FROM cells"))
+        rows = [json.loads(r) for (r,) in conn.execute("SELECT result FROM cells")]
+        return all("worker" not in str(d.get("reason", "")).lower() and d.get("verdict") != "failed" for d in rows)
     finally:
         conn.close()
 
@@ -138,7 +143,7 @@ def test_kill_a_pool_worker_mid_map(tmp_path, reference):
     store = tmp_path / "s.db"
     proc = start("--workers", "2", "--store", str(store))
     killed = 0
-    for n in (4, 14):  # twice: early and in the bisection phase
+    for n in (1, 1):  # twice, once at least one column is stored (the other columns are in flight)
         if wait_rows(store, n, proc):
             ws = pool_workers(proc.pid)
             if ws:
@@ -162,7 +167,7 @@ def test_kill_a_pool_worker_mid_map(tmp_path, reference):
 def test_kill_the_whole_process_then_rerun(tmp_path, reference, how):
     store = tmp_path / "s.db"
     proc = start("--workers", "2", "--store", str(store))
-    assert wait_rows(store, 6, proc), proc.communicate()[1]
+    assert wait_rows(store, 1, proc), proc.communicate()[1]
     kids = children(proc.pid)
     assert pool_workers(proc.pid), "no pool workers seen"
     os.kill(proc.pid, getattr(signal, how))
@@ -185,7 +190,7 @@ def test_kill_the_whole_process_then_rerun(tmp_path, reference, how):
     assert finished, again.stderr
     assert same
     d = json.loads(again.stdout)
-    assert d["cached_cases"] >= 6 and d["cached_cases"] + d["computed_cases"] == d["cases"]
+    assert d["cached_cases"] >= 1 and d["cached_cases"] + d["computed_cases"] == d["cases"]
     assert no_worker_deaths_stored(store)
 
 
@@ -206,12 +211,12 @@ def test_store_on_a_read_only_mount(tmp_path, reference, partial):
     store = folder / "s.db"
     if partial:
         proc = start("--workers", "1", "--store", str(store))
-        assert wait_rows(store, 10, proc)
+        assert wait_rows(store, 1, proc)
         proc.send_signal(signal.SIGINT)
         proc.communicate(timeout=60)
     else:
         assert cli("--workers", "2", "--store", str(store)).returncode == 0
-    n0 = stored_rows(store)
+    n0 = stored_rows(store, cells=True)
     before = {p.name: p.read_bytes() for p in folder.iterdir()}
     cmd = " ".join([f"mount --bind {folder} {folder} && mount -o remount,ro,bind {folder} && exec",
                     sys.executable, "-m", "amra_core.cli", *MAP, "--workers", "2", "--store", str(store)])
@@ -220,13 +225,13 @@ def test_store_on_a_read_only_mount(tmp_path, reference, partial):
     finished = r.returncode == 0
     same = finished and the_map(r.stdout) == reference
     warn = next((ln for ln in r.stderr.splitlines() if "read-only" in ln), "")
-    record_fault(f"store on a read-only mount ({'partial' if partial else 'complete'} store, {n0} cells)",
-                 finished, same, warn[:160] or r.stderr.strip()[-160:])
+    record_fault(f"store on a read-only mount ({'partial' if partial else 'complete'} store)",
+                 finished, same, f"{n0} cells stored; " + (warn[:160] or r.stderr.strip()[-160:]))
     assert finished, r.stderr
     assert "Traceback" not in r.stderr and "read-only" in warn
     assert same
     d = json.loads(r.stdout)
-    assert d["cached_cases"] == n0
+    assert 0 < d["cached_cases"] <= n0 and (partial or d["cached_cases"] == n0)
     assert {p.name: p.read_bytes() for p in folder.iterdir()} == before  # nothing moved, nothing written
 
 
@@ -252,7 +257,7 @@ def test_a_damaged_row(tmp_path, reference):
     store = tmp_path / "s.db"
     assert cli("--workers", "2", "--store", str(store)).returncode == 0
     conn = sqlite3.connect(store)
-    keys = [k for (k,) in conn.execute("SELECT key FROM cells ORDER BY key")]
+    keys = [k for (k, r) in conn.execute("SELECT key, result FROM cells ORDER BY key") if '"verdict"' in r]
     r0 = conn.execute("SELECT result FROM cells WHERE key = ?", (keys[0],)).fetchone()[0]
     d0 = json.loads(r0)
     d0["stable"] = not d0["stable"]  # a plausible lie: valid JSON, the opposite verdict
@@ -270,7 +275,8 @@ def test_a_damaged_row(tmp_path, reference):
     assert finished, r.stderr
     assert "Traceback" not in r.stderr and len(warn) == 2
     assert same
-    assert json.loads(r.stdout)["computed_cases"] == 2
+    d = json.loads(r.stdout)
+    assert 0 < d["computed_cases"] < d["cases"]  # the damaged rows' columns, not the whole map
     again = cli("--workers", "1", "--store", str(store))  # repaired: served whole, no warning
     assert again.returncode == 0 and "skipped" not in again.stderr
     assert json.loads(again.stdout)["computed_cases"] == 0 and the_map(again.stdout) == reference

@@ -1,0 +1,285 @@
+"""One session's dashboard: the controls, the run worker, the views, and the message pump.
+
+Built fresh per session by :func:`app.main.create_app`. Worker threads post ``(kind, payload)``
+messages to :attr:`Dashboard.outbox`; :meth:`Dashboard.pump` (a 50 ms periodic callback on the
+session's event loop) drains it, streams rows into the Buffer, and updates the panes, so the
+document is only touched on its own loop. Closing the session stops the worker and releases the
+map subscription (:meth:`Dashboard.close`).
+"""
+from __future__ import annotations
+
+import queue
+from typing import Optional
+
+import numpy as np
+import pandas as pd
+import panel as pn
+
+from amra_core.boundary import MapSpec
+
+from . import exports
+from . import analysis
+from .background import LatestTasks, get_analysis_pool
+from .controls import LIVE_PARAMETERS, UPLOADED, Controls
+from .disc_view import DiscView
+from .fan_view import FanView
+from .ladder import LadderView, ladder_cases
+from .map_view import MapView
+from .modes_view import ModesView
+from .rotor_upload import UploadError, parse_rotor_upload
+from .run_worker import RunWorker
+from .settings import ServerSettings
+from .streams import TimeHistories, frame_from_rows
+from .verdict_card import VerdictCard
+
+PUMP_MS = 50
+MAP_POLL_EVERY = 8  #: pump ticks between map polls (0.4 s)
+CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
+                   "aero", "inflow", "map_columns", "map_coarse")
+MAP_GJ_RANGE = (30.0, 3000.0)
+
+
+class Dashboard(pn.viewable.Viewer):
+    def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, **params):
+        super().__init__(**params)
+        self.settings = settings or ServerSettings.from_env()
+        self.controls = Controls(max_run_s=self.settings.max_run_s)
+        self.outbox: queue.SimpleQueue = queue.SimpleQueue()
+        self.worker = RunWorker(self._post)
+        self.tasks = LatestTasks(self._post, pool if pool is not None else get_analysis_pool())
+        self.histories = TimeHistories()
+        self.verdict = VerdictCard()
+        self.modes = ModesView()
+        self.disc = DiscView()
+        self.fan = FanView()
+        self.ladder = LadderView()
+        self.map = MapView(registry, who=id(self), on_pick=self.load_cell) if registry is not None else None
+        self.uploaded = None
+        self.last_history: Optional[np.ndarray] = None
+        self._previous_frame = None
+        self.current_run = 0
+        self.messages: list = []
+        self.alert = pn.pane.Alert("", alert_type="danger", visible=False, sizing_mode="stretch_width",
+                                   name="messages")
+        self.run_status = pn.pane.Markdown("**Run:** idle", name="run-status")
+        self.live_note = pn.pane.Markdown("", name="live-note")
+        self._ticks = 0
+        self._locus_key = None
+        self._periodic = None
+        self._closed = False
+        self.controls.param.watch(self._on_live, list(LIVE_PARAMETERS))
+        self.controls.param.watch(self._on_case, list(CASE_PARAMETERS))
+        self.controls.param.watch(lambda e: self.worker.set_speed(e.new), ["speed"])
+        # the analyses start once the page has loaded (pn.state.onload in main), or on first change
+
+    # ------------------------------------------------------------------ messages
+    def _post(self, kind: str, payload: dict) -> None:
+        self.outbox.put((kind, payload))
+
+    def notify(self, text: str, level: str = "error") -> None:
+        """A visible message: the alert pane (the last three messages, until Reset) and a toast."""
+        self.messages.append((level, text))
+        self.alert.alert_type = {"error": "danger", "warning": "warning", "info": "info"}.get(level, "danger")
+        self.alert.object = "\n\n".join(f"**{lv}:** {t}" for lv, t in self.messages[-3:])
+        self.alert.visible = True
+        notes = pn.state.notifications if pn.state.curdoc is not None else None
+        if notes is not None:
+            getattr(notes, level if level in ("error", "warning", "info") else "error")(text, duration=6000)
+
+    # ------------------------------------------------------------------ actions
+    def start_run(self, event=None) -> bool:
+        try:
+            case = self.controls.case(self.uploaded)
+        except Exception as exc:  # noqa: BLE001 - RotorError, SettingsError, ValueError
+            self.notify(f"cannot run this case: {exc}")
+            return False
+        self.histories.clear()
+        self.verdict.reset()
+        self.current_run = self.worker.run_id + 1  # before the thread can post anything
+        self.worker.start(case, self.controls.speed)
+        self.run_status.object = "**Run:** starting ..."
+        return True
+
+    def stop_run(self, event=None) -> None:
+        self.worker.stop(timeout=1.0)
+
+    def reset(self, event=None) -> None:
+        self.worker.stop(timeout=1.0)
+        self.current_run = self.worker.run_id + 1  # ignore anything the old run still posts
+        self.histories.clear()
+        self._previous_frame = None
+        self.ladder.compare(None, None)
+        self.verdict.reset()
+        self.messages.clear()
+        self.alert.visible = False
+        self.run_status.object = "**Run:** idle"
+
+    def run_ladder(self, event=None) -> None:
+        try:
+            cases = ladder_cases(self.controls, self.uploaded)
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"cannot run the ladder: {exc}")
+            return
+        self.ladder.info.object = "Running the case at rigid, fem-torsion and fem-coupled ..."
+        self.tasks.submit("ladder", analysis.run_ladder, cases)
+
+    def upload(self, data: bytes, filename: str) -> bool:
+        try:
+            rotor = parse_rotor_upload(data, filename)
+        except UploadError as exc:
+            self.notify(str(exc))
+            return False
+        self.uploaded = rotor
+        if self.controls.rotor == UPLOADED:
+            self.refresh_analyses()
+        else:
+            self.controls.rotor = UPLOADED
+        self.notify(f"rotor file {filename!r} loaded: {rotor.name}, R = {rotor.radius_m:g} m", "info")
+        return True
+
+    def load_cell(self, cell) -> None:
+        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 4), gj_nm2=float(cell.gj_nm2))
+        self.notify(f"loaded map cell CG {100 * cell.cg:.1f} % chord, GJ {cell.gj_nm2:.4g} N m²/rad "
+                    f"({cell.verdict}); press Run to simulate it", "info")
+
+    # ------------------------------------------------------------------ parameter changes
+    def _on_live(self, *events) -> None:
+        if self.worker.running:
+            self.worker.set_live(**self.controls.live_values())
+            self.live_note.object = (f"applied live at the next chunk: GJ {self.controls.gj_nm2:.4g} N m²/rad, "
+                                     f"EA {self.controls.ea_pct:g} %, CG {self.controls.cg_pct:g} %")
+
+    def _on_case(self, *events) -> None:
+        if self.worker.running and any(e.name not in LIVE_PARAMETERS for e in events):
+            self.live_note.object = "this change takes effect at the next run (only GJ, EA and CG apply live)"
+        self.refresh_analyses()
+
+    def map_spec(self) -> MapSpec:
+        c = self.controls
+        rotor = self.uploaded if c.rotor == UPLOADED else c.rotor
+        if rotor is None:
+            raise ValueError("no rotor file uploaded")
+        cgs = tuple(round(float(x), 4) for x in np.linspace(0.20, 0.50, c.map_columns))
+        return MapSpec(rotor=rotor, fidelity=c.fidelity, aero=c.aero, mu=float(c.mu), ea=c.ea_pct / 100.0,
+                       cg_values=cgs, gj_min=MAP_GJ_RANGE[0], gj_max=MAP_GJ_RANGE[1], n_coarse=c.map_coarse)
+
+    def refresh_analyses(self) -> None:
+        """Recompute the modes, root locus and fan plot; follow the map for the current case."""
+        c = self.controls
+        self.modes.set_gj(c.gj_nm2)
+        if self.map is not None:
+            self.map.mark(c.cg_pct, c.gj_nm2)
+        try:
+            rotor = c.rotor_obj(self.uploaded)
+            flight, settings = c.flight(), c.settings()
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"invalid case: {exc}")
+            return
+        self.tasks.submit("modes", analysis.modes_result, rotor, flight, settings)
+        key = (c.rotor, id(self.uploaded), c.ea_pct, c.cg_pct, flight, settings)
+        if key != self._locus_key:
+            self._locus_key = key
+            self.tasks.submit("locus", analysis.locus_result, rotor, flight, settings, c.cg_pct / 100.0)
+        self.tasks.submit("fan", analysis.fan_data, rotor, settings.fidelity)
+        if self.map is not None:
+            try:
+                self.map.follow(self.map_spec())
+            except Exception as exc:  # noqa: BLE001
+                self.notify(f"no map for this case: {exc}")
+
+    # ------------------------------------------------------------------ the pump (event loop)
+    def pump(self) -> int:
+        """Drain the outbox and update the page; returns the number of rows streamed."""
+        frames = []
+        while True:
+            try:
+                kind, p = self.outbox.get_nowait()
+            except queue.Empty:
+                break
+            if "run_id" in p and p["run_id"] != self.current_run:
+                continue
+            if kind == "rows":
+                if len(p["rows"]):
+                    frames.append(frame_from_rows(p["rows"], p["gj_nm2"]))
+                self._run_text(f"running, t = {p['t_s']:.2f} s")
+            elif kind == "status":
+                self._run_text(p["text"])
+            elif kind == "started":
+                self.verdict.show(None, False)
+                if p["start_note"].startswith("no steady"):
+                    self.notify(f"no trim exists for this case: {p['start_note']}", "warning")
+            elif kind == "verdict":
+                self.verdict.show(p["verdict"], p["final"], p["status"], p["start_note"])
+                if p["final"] and p["status"] == "numerical-failure":
+                    self.notify(f"the run failed numerically: {p['verdict'].explanation}")
+            elif kind == "disc":
+                self.disc.show(p["data"])
+            elif kind == "finished":
+                self.last_history = p["history"]
+                if len(p["history"]):
+                    frame_all = frame_from_rows(p["history"], float("nan"))
+                    self.ladder.compare(self._previous_frame, frame_all)
+                    self._previous_frame = frame_all
+            elif kind == "applied":
+                v = p["values"]
+                self.live_note.object = (f"applied live at t = {p['t_s']:.2f} s: GJ {v['gj_nm2']:.4g} N m²/rad, "
+                                         f"EA {100 * v['x_ea']:.3g} %, CG {100 * v['x_cg']:.3g} %")
+            elif kind == "modes":
+                self.modes.show_modes(p)
+            elif kind == "locus":
+                self.modes.show_locus(p["points"], p["text"])
+            elif kind == "fan":
+                self.fan.show(p)
+            elif kind == "ladder":
+                self.ladder.show(p)
+                self.ladder.info.object = "Fidelity ladder: the current case at the three fidelities."
+            elif kind == "error":
+                self.notify(p["text"])
+        n = 0
+        if frames:
+            frame = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
+            self.histories.send(frame)
+            self.fan.set_omega(float(frame["omega_rad_s"].iloc[-1]))
+            n = len(frame)
+        self._ticks += 1
+        if self.map is not None and self._ticks % MAP_POLL_EVERY == 1:
+            self.map.poll()
+        return n
+
+    def _run_text(self, text: str) -> None:
+        obj = f"**Run:** {text}"
+        if self.run_status.object != obj:
+            self.run_status.object = obj
+
+    # ------------------------------------------------------------------ exports
+    def history_csv(self):
+        return exports.history_csv(self.last_history if self.last_history is not None else
+                                   (self.worker.sim.history if self.worker.sim is not None else None))
+
+    def modes_csv(self):
+        return self.modes.csv()
+
+    def map_csv(self):
+        from .map_view import map_csv
+        return map_csv(self.map.cells if self.map is not None else [])
+
+    # ------------------------------------------------------------------ lifecycle
+    def start_periodic(self) -> None:
+        from .server_limits import stream_period_ms
+        self._periodic = pn.state.add_periodic_callback(self.pump, period=stream_period_ms(PUMP_MS))
+
+    def close(self, *args) -> None:
+        if self._closed:
+            return
+        self._closed = True
+        if self._periodic is not None:
+            self._periodic.stop()
+        self.worker.stop(timeout=5.0)
+        self.tasks.close()
+        if self.map is not None:
+            self.map.release()
+
+    def __panel__(self):
+        from .layout import build_layout
+        return build_layout(self)
+

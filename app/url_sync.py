@@ -1,0 +1,96 @@
+"""Every control mirrored in the URL, so a case can be shared as a link and reopens exactly.
+
+:func:`apply_query` validates each query value the way a widget value is validated (param
+bounds and types, finite numbers) and applies the good ones (the preset first, so explicit
+values win); each bad one gives a message naming it. :func:`apply_session_query` does so when the
+session is created; :func:`sync_url` (once the page has loaded) then keeps the URL in step with the
+controls through ``pn.state.location.sync``.
+"""
+from __future__ import annotations
+
+import math
+import urllib.parse
+
+import param
+
+#: control name -> URL key
+URL_KEYS = {"preset": "preset", "rotor": "rotor", "gj_nm2": "gj", "ea_pct": "ea", "cg_pct": "cg", "mu": "mu",
+            "airspeed_m_s": "v", "omega_hold_rad_s": "omega_hold", "fidelity": "fidelity", "aero": "aero",
+            "inflow": "inflow", "run_s": "run_s", "speed": "speed", "map_columns": "map_columns",
+            "map_coarse": "map_coarse"}
+_BY_KEY = {v: k for k, v in URL_KEYS.items()}
+
+
+def _coerce(p: param.Parameter, name: str, raw):
+    if isinstance(p, param.Integer):
+        if isinstance(raw, float) and raw.is_integer():
+            raw = int(raw)
+        if isinstance(raw, str):
+            raw = int(raw)
+    elif isinstance(p, param.Number):
+        if isinstance(raw, str):
+            raw = float(raw)
+        if isinstance(raw, (int, float)) and not isinstance(raw, bool) and not math.isfinite(raw):
+            raise ValueError(f"{name} = {raw!r} is not allowed: must be a finite number")
+    elif isinstance(p, param.Selector) and not isinstance(raw, str):
+        raw = str(raw)
+    return raw
+
+
+def apply_query(controls: param.Parameterized, query: dict) -> list:
+    """Apply URL query values (already parsed, e.g. ``Location.query_params``); return messages
+    for those rejected (the control keeps its value)."""
+    errors = []
+    keys = sorted((k for k in query if k in _BY_KEY), key=lambda k: k != "preset")
+    for key in keys:
+        name = _BY_KEY[key]
+        p = controls.param[name]
+        raw = query[key]
+        try:
+            value = _coerce(p, key, raw)
+            if name == "rotor" and value == "uploaded file":
+                raise ValueError("an uploaded rotor cannot be shared by link (upload the file again)")
+            controls.param.update({name: value})
+        except Exception as exc:  # noqa: BLE001 - every bad value becomes a message
+            allowed = ""
+            if isinstance(p, param.Number) and p.bounds:
+                allowed = f" (allowed {p.bounds[0]:g} to {p.bounds[1]:g})"
+            elif isinstance(p, param.Selector):
+                allowed = f" (allowed: {', '.join(map(str, p.objects))})"
+            errors.append(f"link parameter {key} = {raw!r} was ignored{allowed}: {_short(exc)}")
+    return errors
+
+
+def _short(exc: Exception) -> str:
+    text = str(exc).split("\n")[0]
+    return text if len(text) < 200 else text[:200] + " ..."
+
+
+def query_string(controls: param.Parameterized) -> str:
+    """The URL query for the current values (what a shared link carries)."""
+    return urllib.parse.urlencode({key: getattr(controls, name) for name, key in URL_KEYS.items()})
+
+
+def session_query() -> dict:
+    """The query of the session's request, parsed as ``Location.query_params`` parses it."""
+    import panel as pn
+    from panel.util import parse_query
+    args = pn.state.session_args or {}
+    flat = {k: (v[-1].decode("utf-8", "replace") if isinstance(v[-1], bytes) else str(v[-1]))
+            for k, v in args.items() if v}
+    return parse_query("?" + urllib.parse.urlencode(flat))
+
+
+def apply_session_query(controls: param.Parameterized, notify) -> None:
+    """At session creation: apply the link's values, so the first paint already shows the case."""
+    for msg in apply_query(controls, session_query()):
+        notify(msg)
+
+
+def sync_url(controls: param.Parameterized) -> None:
+    """After the page has loaded: mirror every control in the URL (the browser's location is
+    known by then; values already applied by :func:`apply_session_query` are not re-reported)."""
+    import panel as pn
+    loc = pn.state.location
+    if loc is not None:
+        loc.sync(controls, dict(URL_KEYS), on_error=lambda bad: None)

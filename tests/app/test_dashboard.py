@@ -1,0 +1,127 @@
+"""The session object without a browser: pump -> Buffer, apply-live from the controls, stop on
+close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as messages."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from amra_core.simulation import HISTORY_COLUMNS
+from app.dashboard import Dashboard
+from app.map_jobs import MapRegistry
+
+
+@pytest.fixture
+def dash(server_settings, analysis_pool):
+    reg = MapRegistry(server_settings)
+    d = Dashboard(server_settings, registry=reg, pool=analysis_pool)
+    d.controls.param.update(map_columns=2, map_coarse=3)
+    yield d
+    d.close()
+    reg.close()
+
+
+def pump_until(d, pred, wait, timeout_s=60, what="condition"):
+    def step():
+        d.pump()
+        return pred()
+    wait(step, timeout_s, what=what)
+
+
+def test_a_run_streams_into_the_buffer_and_ends_with_a_verdict(dash, wait):
+    dash.controls.param.update(run_s=1.0, speed=10.0)
+    assert dash.start_run()
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
+    data = dash.histories.buffer.data
+    assert len(data) > 20 and list(data.columns)[:2] == ["t_s", "omega_rad_s"]
+    assert data["t_s"].iloc[-1] == pytest.approx(1.0, abs=0.01) and (data["gj_nm2"] == 1500.0).all()
+    assert dash.verdict.verdict.verdict == "stable" and "data-final='true'" in dash.verdict.pane.object
+    assert "finished" in dash.run_status.object
+    csv = dash.history_csv().getvalue().splitlines()
+    assert csv[0] == ",".join(HISTORY_COLUMNS) and len(csv) == len(dash.last_history) + 1
+
+
+def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
+    dash.controls.param.update(run_s=4.0, speed=4.0)
+    dash.start_run()
+    pump_until(dash, lambda: len(dash.histories.buffer.data) and dash.histories.buffer.data["t_s"].iloc[-1] > 0.5,
+               wait, what="0.5 s of run")
+    t_change = dash.histories.buffer.data["t_s"].iloc[-1]
+    dash.controls.gj_nm2 = 700.0
+    pump_until(dash, lambda: (dash.histories.buffer.data["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
+    data = dash.histories.buffer.data
+    first_new = data[data["gj_nm2"] == 700.0]["t_s"].iloc[0]
+    assert first_new > t_change and np.all(np.diff(data["t_s"]) > 0)  # the same run, continuing
+    assert "applied live" in dash.live_note.object
+    dash.stop_run()
+
+
+def test_close_stops_the_worker_and_releases_the_map(dash, wait):
+    dash.controls.param.update(run_s=30.0, speed=1.0)
+    dash.refresh_analyses()
+    dash.start_run()
+    wait(lambda: dash.worker.running, 10, what="the worker")
+    job = dash.map.job
+    assert job is not None and id(dash) in job.subscribers
+    dash.close()
+    assert not dash.worker.running
+    assert id(dash) not in job.subscribers
+
+
+def test_fig10_preset_is_unstable(dash, wait):
+    dash.controls.preset = "fig10"
+    dash.controls.param.update(run_s=6.0, speed=50.0)
+    dash.start_run()
+    pump_until(dash, lambda: dash.last_history is not None, wait, 120, what="the Fig. 10 run")
+    v = dash.verdict.verdict
+    assert v.unstable, v
+    assert any("no trim exists" in t for _, t in dash.messages)  # the start note is shown
+
+
+def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
+    dash.refresh_analyses()
+    pump_until(dash, lambda: dash.modes.points and len(dash.modes.frame) and dash.fan.pipe.data, wait, 180,
+               what="modes, locus and fan plot")
+    f = dash.modes.frame
+    assert {"frequency [Hz]", "damping ratio [-]", "real part [1/s]"} <= set(f.columns)
+    assert "aero lag" not in set(f["mode"]) and (f["stable"] == "yes").all()
+    gjs = [p.gj_nm2 for p in dash.modes.points]
+    assert max(gjs) == pytest.approx(3000.0) and min(gjs) == pytest.approx(50.0)
+    assert not all(p.trimmed for p in dash.modes.points)  # the fold at low GJ (paper-boundary blade)
+    assert "no trim (fold)" in dash.modes.locus_info.object
+    assert dash.modes.csv().getvalue().startswith("mode,frequency [Hz]")
+    fan = dash.fan.pipe.data
+    assert len(fan["modes"]) >= 5
+    teeter = dict(fan["modes"])["teeter"]  # the rigid tilt of a teetering rotor is exactly 1/rev
+    np.testing.assert_allclose(teeter, fan["omega"] / (2 * np.pi), atol=1e-6)
+
+
+def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
+    dash.refresh_analyses()
+    pump_until(dash, lambda: dash.map.job.state == "done" and dash.map.cells, wait, 180, what="the map")
+    dash.map.poll()
+    assert dash.map.progress.value == 100 and "complete" in dash.map.status.object
+    cell = dash.map.cells[3]
+    dash.load_cell(cell)
+    assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == cell.gj_nm2
+    assert dash.map.csv().getvalue().splitlines()[0].startswith("cg,gj_nm2,verdict")
+    assert len(dash.map.csv().getvalue().splitlines()) == len(dash.map.cells) + 1
+
+
+def test_bad_input_becomes_a_message_and_the_session_keeps_working(dash, wait):
+    assert not dash.upload(b"this is [not toml", "broken.toml")
+    assert dash.alert.visible and "broken.toml" in dash.alert.object and "not valid TOML" in dash.alert.object
+    dash.controls.omega_hold_rad_s = 0.5  # in the widget's bounds, refused by the core
+    assert not dash.start_run()
+    assert "omega_hold_rad_s" in dash.alert.object
+    dash.controls.omega_hold_rad_s = 0.0
+    dash.controls.param.update(run_s=0.5, speed=20.0)
+    assert dash.start_run()
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="a good run after the errors")
+
+
+def test_uploaded_rotor_is_used(dash):
+    from pathlib import Path
+    data = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
+    assert dash.upload(data, "mine.toml")
+    assert dash.controls.rotor == "uploaded file" and dash.controls.case(dash.uploaded).rotor.name == "mccutcheon"
+    assert dash.map_spec().rotor.name == "mccutcheon"

@@ -1,0 +1,42 @@
+"""URL round trip: every control survives query_string -> parse -> apply_query; bad values are named."""
+from __future__ import annotations
+
+import math
+
+from panel.util import parse_query
+
+from app.controls import Controls
+from app.url_sync import URL_KEYS, apply_query, query_string
+
+
+def test_every_control_is_in_the_url():
+    assert set(URL_KEYS) == set(Controls().values())
+
+
+def test_round_trip_reopens_exactly_the_same_case():
+    a = Controls(preset="fig13")
+    a.param.update(gj_nm2=612.5, cg_pct=37.25, speed=2.5, run_s=7.5, map_columns=5, aero="quasi-steady")
+    q = parse_query("?" + query_string(a))
+    b = Controls()
+    assert apply_query(b, q) == []
+    assert b.values() == a.values()
+    assert b.case() == a.case()
+
+
+def test_the_preset_is_applied_first_so_explicit_values_win():
+    b = Controls()
+    assert apply_query(b, {"gj": 250.0, "preset": "fig10"}) == []
+    assert b.gj_nm2 == 250.0 and b.fidelity == "rigid" and b.run_s == 10.0
+
+
+def test_bad_values_are_reported_by_name_and_ignored():
+    b = Controls()
+    msgs = apply_query(b, {"gj": 1e9, "cg": "abc", "mu": float("nan"), "fidelity": "beam", "map_columns": 2.5,
+                           "rotor": "uploaded file", "ea": 30.0, "unknown": 1})
+    joined = "\n".join(msgs)
+    assert len(msgs) == 6
+    for key in ("gj", "cg", "mu", "fidelity", "map_columns", "rotor"):
+        assert f"link parameter {key} =" in joined
+    assert "allowed 10 to 10000" in joined and "rigid, fem-torsion, fem-coupled" in joined
+    assert b.ea_pct == 30.0  # the good one is applied
+    assert b.gj_nm2 == 1500.0 and b.cg_pct == 40.0 and b.mu == 0.0 and math.isfinite(b.mu)

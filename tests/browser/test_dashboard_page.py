@@ -1,0 +1,146 @@
+"""The dashboard in headless Chromium: offline page, streaming, apply-live, a paper preset's verdict,
+the boundary map filling in and loading a clicked cell, bad uploads, shared links, session close.
+Short runs at rigid fidelity and a 3-column map keep it quick; screenshots go to
+test-results/screenshots/."""
+from __future__ import annotations
+
+import re
+
+import pytest
+from playwright.sync_api import expect
+
+from app.layout import TITLE
+from conftest import shot
+from helpers import map_cells, open_dashboard, plot_point, progress_value, streamed, wait_for
+
+pytestmark = pytest.mark.browser
+UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
+
+
+def _session(dashboard_server):
+    return dashboard_server[1][-1]
+
+
+def test_page_loads_offline_without_console_errors(watched_page, dashboard_url):
+    page = watched_page
+    open_dashboard(page, dashboard_url)
+    expect(page).to_have_title(TITLE)
+    expect(page.get_by_text("from the store").first).to_be_visible(timeout=60_000)  # the map's status line
+    assert plot_point(page, "Rotor speed", 0.0, 0.0) is not None  # the Bokeh plots are drawn
+    assert plot_point(page, "Stability boundary map", 30.0, 100.0) is not None
+    page.wait_for_timeout(2000)
+    shot(page, "01-page-loaded")
+    assert page.amra_outside == [], f"requests to outside hosts: {page.amra_outside}"
+    assert page.amra_errors == [], f"console errors: {page.amra_errors}"
+
+
+def test_a_run_streams_points_into_the_plots(watched_page, dashboard_url):
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?run_s=4&speed=2")
+    page.locator(".amra-run button").click()
+    first = wait_for(lambda: streamed(page)[0] > 0 and streamed(page), 60, what="the first streamed points")
+    later = wait_for(lambda: streamed(page)[1] and streamed(page)[1] > first[1] + 0.5 and streamed(page), 30,
+                     what="more points")
+    assert later[0] > first[0]
+    expect(page.locator(".amra-verdict[data-final='true']")).to_be_visible(timeout=30_000)
+    shot(page, "02-run-streamed")
+    assert page.amra_errors == []
+
+
+def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_server):
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?run_s=30&speed=1")
+    page.locator(".amra-run button").click()
+    before = wait_for(lambda: streamed(page)[1] and streamed(page)[1] > 0.5 and streamed(page), 60,
+                      what="0.5 s of run")
+    assert before[2] == 1500
+    handle = page.locator(".amra-gj-slider .noUi-handle").first
+    box = handle.bounding_box()
+    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+    page.mouse.down()
+    page.mouse.move(box["x"] - 60, box["y"] + box["height"] / 2, steps=5)
+    page.mouse.up()
+    after = wait_for(lambda: streamed(page)[2] != 1500 and streamed(page), 30, what="points with the new GJ")
+    assert after[2] < 1500 and after[1] > before[1]  # the same run continued with a softer blade
+    d = _session(dashboard_server)
+    assert d.controls.gj_nm2 == after[2] and d.worker.running
+    expect(page.get_by_text("applied live at t =").first).to_be_visible(timeout=10_000)
+    shot(page, "03-gj-changed-mid-run")
+    page.locator(".amra-stop button").click()
+    wait_for(lambda: not d.worker.running, 20, what="the stop")
+
+
+def test_fig10_preset_ends_unstable(watched_page, dashboard_url):
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?preset=fig10&run_s=6&speed=6")
+    expect(page.get_by_text("Paper Fig. 10").first).to_be_visible(timeout=30_000)
+    page.locator(".amra-run button").click()
+    card = page.locator(".amra-verdict[data-final='true']")
+    expect(card).to_be_visible(timeout=90_000)
+    verdict = card.get_attribute("data-verdict")
+    assert verdict in UNSTABLE
+    shot(page, "04-fig10-unstable")
+
+
+def test_map_fills_in_and_clicking_a_cell_loads_it(watched_page, dashboard_server):
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?map_columns=3&map_coarse=3&ea=31")
+    values = []
+    wait_for(lambda: values.append(progress_value(page)) or (values[-1] is not None and values[-1] >= 100), 180,
+             every_s=0.2, what="the map to complete")
+    seen = [v for v in values if v is not None]
+    assert min(seen) < 100 and seen[-1] == 100 and sorted(seen) == seen  # advancing
+    n = wait_for(lambda: map_cells(page) >= 9 and map_cells(page), 30, what="the cells in the plot")
+    d = _session(dashboard_server)
+    assert n == len(d.map.cells)
+    shot(page, "05-map-complete")
+    target = d.map.cells[0]
+    for c in d.map.cells:  # a cell away from the map's edges
+        if abs(c.cg - 0.35) < 1e-6 and 200 < c.gj_nm2 < 400:
+            target = c
+    xy = plot_point(page, "Stability boundary map", 100 * target.cg, target.gj_nm2)
+    assert xy is not None
+    page.mouse.click(*xy)
+    wait_for(lambda: d.controls.gj_nm2 == target.gj_nm2, 20, what="the clicked cell to load")
+    assert d.controls.cg_pct == pytest.approx(100 * target.cg)
+    expect(page.get_by_text("loaded map cell").first).to_be_visible(timeout=10_000)
+    shot(page, "06-map-cell-loaded")
+
+
+def test_a_broken_rotor_file_shows_a_message_and_the_session_keeps_working(watched_page, dashboard_url):
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?run_s=1&speed=4")
+    page.locator(".amra-upload input[type='file']").set_input_files(
+        {"name": "broken.toml", "mimeType": "application/toml", "buffer": b"name = [this is not toml"})
+    expect(page.get_by_text(re.compile("broken.toml.*not valid TOML")).first).to_be_visible(timeout=20_000)
+    shot(page, "07-broken-rotor-file")
+    page.locator(".amra-run button").click()
+    wait_for(lambda: streamed(page)[0] > 0, 60, what="a run after the bad upload")
+
+
+def test_a_shared_url_reopens_the_same_case(watched_page, dashboard_server, browser):
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?fidelity=fem-torsion&gj=420&cg=36.5&mu=0.05&run_s=7")
+    first = _session(dashboard_server)
+    wait_for(lambda: "map_coarse=" in page.url, 30, what="the URL to mirror the controls")
+    url = page.url
+    assert "gj=420" in url and "fidelity=fem-torsion" in url
+    other = browser.new_page()
+    open_dashboard(other, url)
+    second = _session(dashboard_server)
+    assert second is not first
+    assert second.controls.values() == first.controls.values()
+    assert second.controls.case() == first.controls.case()
+    shot(other, "08-shared-url")
+    other.close()
+
+
+def test_closing_the_page_stops_the_run(watched_page, dashboard_server):
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?run_s=30&speed=1")
+    page.locator(".amra-run button").click()
+    wait_for(lambda: streamed(page)[0] > 0, 60, what="the run")
+    d = _session(dashboard_server)
+    assert d.worker.running
+    page.close()
+    wait_for(lambda: not d.worker.running, 30, what="the worker to stop after the session closed")
