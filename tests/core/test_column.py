@@ -127,19 +127,37 @@ def test_every_interval_is_reported(walk_036):
     assert w.critical_gj_nm2 == pytest.approx(iv[-1]["gj_lo_nm2"], rel=0.011)
 
 
-@pytest.mark.slow
-def test_fem_coupled_narrow_window_at_cg_032(paper):
-    """Issue 8: fem-coupled CG 0.32 is unstable for GJ ~370-400 and stable above and below (the old
-    7-point grid read 263). Walked from GJ 1000 down to 250 to keep the test short."""
-    w = walk_column(paper.with_overrides(x_ea=EA), FlightCondition(), SolverSettings(fidelity="fem-coupled"), 0.32,
-                    250.0, 1000.0)
-    kinds = [iv["kind"] for iv in w.intervals]
+def test_a_narrow_unstable_window_is_found_and_bracketed(paper, monkeypatch):
+    """The issue's example (fem-coupled CG 0.32 unstable for GJ ~370-400 only) was found by the walk
+    before the physics merge (365-399, see docs/validation-summary.md); with the static pitch terms
+    that column is stable from 250 to 1000, so the walk's window finding is tested here on real
+    trims with the exponents of a 7.5 % wide window (GJ 800-860) raised to +1 1/s: the old 7-point
+    grid (cells at 646 and 1393) could not see it."""
+    import amra_core.column as column
+    from dataclasses import replace as _r
+    real = column.analyse
+
+    class _Res:
+        def __init__(self, modes, stable):
+            self.modes, self.stable = modes, stable
+
+    def windowed(model, tr, *a, **k):
+        res = real(model, tr, *a, **k)
+        gj = float(model.rotor.stations.gj_nm2[0])
+        if 800.0 <= gj <= 860.0:
+            top = max(res.modes, key=lambda m: m.real_part_per_s)
+            return _Res([_r(m, real_part_per_s=1.0) if m is top else m for m in res.modes], False)
+        return res
+
+    monkeypatch.setattr(column, "analyse", windowed)
+    w = walk_column(paper.with_overrides(x_ea=EA), FlightCondition(), SolverSettings(), 0.44, 500.0, 3000.0)
     print([(iv["kind"], round(iv["gj_lo_nm2"]), round(iv["gj_hi_nm2"])) for iv in w.intervals])
-    i = next(k for k, iv in enumerate(w.intervals) if iv["kind"] == "flutter" and iv["gj_lo_nm2"] > 300.0)
-    win = w.intervals[i]
-    assert 350.0 < win["gj_lo_nm2"] < 380.0 and 390.0 < win["gj_hi_nm2"] < 415.0 and win["resolved"]
-    assert kinds[i - 1] == "stable" and kinds[i + 1] == "stable"
-    assert 390.0 < w.critical_gj_nm2 < 415.0
+    win = [iv for iv in w.intervals if iv["kind"] == "flutter" and iv["gj_lo_nm2"] > 700.0]
+    assert len(win) == 1 and win[0]["resolved"]
+    assert win[0]["gj_lo_nm2"] == pytest.approx(800.0, rel=0.02) and win[0]["gj_hi_nm2"] == pytest.approx(860.0, rel=0.02)
+    i = w.intervals.index(win[0])
+    assert w.intervals[i - 1]["kind"] == "stable" and w.intervals[i + 1]["kind"] == "stable"
+    assert w.critical_gj_nm2 == pytest.approx(860.0, rel=0.021)
 
 
 # ----------------------------------------------------------------------------- speed-ups keep the answers
