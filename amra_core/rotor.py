@@ -11,6 +11,7 @@ and CG overrides that the dashboard sliders set.
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field, replace, asdict
 from typing import Optional
@@ -24,6 +25,13 @@ MAX_CHORD_FRACTION = 0.25
 
 class RotorError(ValueError):
     """A rotor description is invalid. The message names field, value and allowed range."""
+
+
+def _short(v):
+    """A long list shown by its start and its length in messages."""
+    if isinstance(v, (list, tuple)) and len(v) > 12:
+        return f"[{', '.join(repr(x) for x in list(v)[:4])}, ... ({len(v)} values)]"
+    return list(v) if isinstance(v, tuple) else v
 
 
 def _fail(name: str, value, allowed: str):
@@ -99,6 +107,8 @@ class BladeStations:
             raw = getattr(self, name)
             if isinstance(raw, (int, float)):
                 _fail(f"stations.{name}", raw, "must be a list with one value per station")
+            if n is not None and len(raw) != n and len(raw) > 1000:  # do not check a huge list value by value
+                _fail(f"stations.{name}", _short(raw), f"must have {n} values, one per station (as r_m)")
             vals = tuple(
                 _check_number(f"stations.{name}[{i}]", v, lo, hi, lo_open) for i, v in enumerate(raw)
             )
@@ -248,7 +258,14 @@ class Rotor:
             i, need = self.stations.inertia_violation(x_ea=ea, x_cg=cg)
             if i is not None:
                 raise RotorError(inertia_message(self.stations, i, need, x_ea=ea, x_cg=cg))
-        return replace(self, stations=replace(self.stations, **changes))
+        # fast path (map keys build thousands of these): the unchanged fields were validated when
+        # this rotor was built and the changed ones just now, so copy instead of re-validating all
+        stations = copy.copy(self.stations)
+        for k, v in changes.items():
+            object.__setattr__(stations, k, v)
+        out = copy.copy(self)
+        object.__setattr__(out, "stations", stations)
+        return out
 
     def to_dict(self) -> dict:
         """The resolved rotor as the solver uses it (SI, chord fractions, root to tip)."""

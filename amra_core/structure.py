@@ -215,7 +215,8 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
       also the linear part of the polar inertia ``J(x) = J0 + 2 f^T x - x^T K2 x``;
     * ``g0 + H x`` [kg m]: the blade's in-plane angular momentum per unit coordinate rate,
       ``G = (g0 + H x)^T x'`` = ``d/dt F(x)`` with
-      ``F = int [m e r (theta0 theta + theta^2/2) - m e u + I_ea (theta0 + theta) w']``,
+      ``F = int [m e r theta0 theta - m e u + I_ea (theta0 + theta) w']`` (the second-order
+      ``m e r theta^2/2`` is left out, see the comment below),
       ``u = 1/2 int_0^r (w'^2 + k_A^2 theta'^2)`` the foreshortening (hub bar included), so
       ``g0 = int (m e r theta0 phi_t + I_ea theta0 phi_w')`` and ``H`` = the Hessian of F."""
     st = rotor.stations
@@ -235,7 +236,12 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
 
     f = vec(m * e * r * th0, dPw) - vec(I * th0, Pt)
     g0 = vec(m * e * r * th0, Pt) + vec(I * th0, dPw)
-    H = integ(m * e * r, Pt, Pt) - integ(Te, dPw, dPw) + integ(I, Pt, dPw) + integ(I, dPw, Pt)
+    # The in-plane momentum of the pitching CG, m e r theta_e theta_e' (a ``m e r theta_e^2/2`` in F),
+    # is left out: its lag counterpart (the same motion about the lag pivot) is not modelled, and
+    # with the small rotor-speed inertia of blades free to lag (J - sum S^2/I_z ~ 2 kg m^2) the
+    # pair (theta, Omega) alone has an indefinite mass matrix once m e r theta_e is ~0.5 rad
+    # worth (a GJ 1 -> 1e6 slider jump ran into it). docs/model-equations.md section 2.
+    H = -integ(Te, dPw, dPw) + integ(I, Pt, dPw) + integ(I, dPw, Pt)
     if trapeze:
         H -= integ(Te * trapeze_radius2(rotor, r), dPt, dPt)
     r0 = mesh.root_m
@@ -248,7 +254,7 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
         mp = pm.mass_kg
         f += mp * (pm.r_m * ep * th0p * dPw1 - ep**2 * th0p * Pt1)
         g0 += mp * (pm.r_m * ep * th0p * Pt1 + ep**2 * th0p * dPw1)
-        H += mp * (pm.r_m * ep * np.outer(Pt1, Pt1) + ep**2 * (np.outer(Pt1, dPw1) + np.outer(dPw1, Pt1)))
+        H += mp * ep**2 * (np.outer(Pt1, dPw1) + np.outer(dPw1, Pt1))
     return f, g0, H
 
 

@@ -265,7 +265,8 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ lifecycle
     def start_periodic(self) -> None:
-        self._periodic = pn.state.add_periodic_callback(self.pump, period=PUMP_MS)
+        from .server_limits import stream_period_ms
+        self._periodic = pn.state.add_periodic_callback(self.pump, period=stream_period_ms(PUMP_MS))
 
     def close(self, *args) -> None:
         if self._closed:

@@ -19,7 +19,7 @@ from typing import Optional
 from amra_core.boundary import MapSpec, cell_class, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
 
-from .server_limits import Busy, FairSlots, open_store
+from .server_limits import Busy, FairSlots, lower_priority_of_this_thread, open_store
 
 from .settings import ServerSettings
 
@@ -51,6 +51,7 @@ class MapJob:
         self._thread.join(timeout)
 
     def _run(self) -> None:
+        lower_priority_of_this_thread()  # maps yield the CPU to interactive runs (server_limits)
         reg = self._registry
         with reg.slots.slot(self, self.cancel) as got:  # first come, first served (server_limits)
             if not got or self.cancel.is_set():

@@ -102,3 +102,36 @@ class FairSlots:
             with self._cond:
                 self._running.discard(who)
                 self._cond.notify_all()
+
+
+#: niceness of background work (map jobs and the processes they start, per-session analyses):
+#: interactive runs and the event loop get the CPU first
+BACKGROUND_NICE = 10
+
+
+def lower_priority_of_this_thread(nice: int = BACKGROUND_NICE) -> None:
+    """Lower the CPU priority of the calling thread (Linux: niceness is per thread, and processes
+    the thread starts inherit it, so a map job's worker pool runs at the same low priority).
+    Without effect (and harmless) where not supported."""
+    import os
+    try:
+        tid = threading.get_native_id()
+        cur = os.getpriority(os.PRIO_PROCESS, tid)
+        if cur < nice:
+            os.setpriority(os.PRIO_PROCESS, tid, nice)
+    except (AttributeError, OSError):
+        pass
+
+
+def stream_period_ms(default: int) -> int:
+    """Period of each session's update of the page [ms]: ``AMRA_STREAM_PERIOD_MS`` (set by
+    ``amra serve --stream-period-ms``), else ``default``. Each update of the live plots costs the
+    server a roughly fixed amount of CPU whatever the number of new rows, so a team server sends
+    fewer, larger updates."""
+    import os
+    raw = os.environ.get("AMRA_STREAM_PERIOD_MS", "")
+    try:
+        v = int(raw)
+    except ValueError:
+        return default
+    return v if 20 <= v <= 2000 else default

@@ -137,7 +137,16 @@ class Server:
                 time.sleep(0.5)
 
     def rss_mb(self) -> float:
+        """The whole tree: the server and its map worker processes [MB]."""
         return tree_rss_mb(self.proc.pid)
+
+    def main_rss_mb(self) -> float:
+        """The server process alone (where the sessions live) [MB]."""
+        try:
+            with open(f"/proc/{self.proc.pid}/statm") as f:
+                return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+        except OSError:
+            return 0.0
 
     def stop(self) -> None:
         for sig in (signal.SIGTERM, signal.SIGKILL):
@@ -223,13 +232,16 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
     from playwright.async_api import async_playwright
     launch = launch or {"executable_path": CHROMIUM, "args": CHROMIUM_ARGS, "headless": True}
     rss0 = server.rss_mb() if server else None
+    main0 = server.main_rss_mb() if server else None
     peak = [rss0 or 0.0]
+    peak_main = [main0 or 0.0]
     stop = asyncio.Event()
 
     async def sample():
         while not stop.is_set():
             if server:
                 peak[0] = max(peak[0], server.rss_mb())
+                peak_main[0] = max(peak_main[0], server.main_rss_mb())
             await asyncio.sleep(0.5)
 
     async with async_playwright() as p:
@@ -260,7 +272,8 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
     if server:
         out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
                     "rss_sessions_open_mb": round(rss_open, 1),
-                    "mb_per_session": round((peak[0] - rss0) / n, 1)})
+                    "server_rss_base_mb": round(main0, 1), "server_rss_peak_mb": round(peak_main[0], 1),
+                    "mb_per_session": round((peak_main[0] - main0) / n, 1)})
     return out
 
 
@@ -268,8 +281,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sessions", type=int, nargs="+", default=[1, 8, 16, 32])
     ap.add_argument("--moves", type=int, default=3, help="GJ slider moves per session")
-    ap.add_argument("--run-s", type=float, default=60.0, help="simulated run length per session [s]")
-    ap.add_argument("--timeout", type=float, default=90.0, help="per-step timeout [s]")
+    ap.add_argument("--run-s", type=float, default=120.0, help="simulated run length per session [s]")
+    ap.add_argument("--timeout", type=float, default=60.0, help="per-step timeout [s]")
     ap.add_argument("--stagger", type=float, default=0.25, help="delay between session starts [s]")
     ap.add_argument("--url", help="an already running dashboard (.../main); default: start amra serve")
     ap.add_argument("--serve-arg", action="append", default=[], help="extra amra serve argument (repeatable)")

@@ -17,7 +17,7 @@ flag                           variable                          default
 ``--prefix P``                 ``AMRA_PREFIX``                   none
 ``--basic-auth FILE``          ``AMRA_BASIC_AUTH``               none
 ``--cookie-secret S``          ``AMRA_COOKIE_SECRET``            random per start (basic auth only)
-``--map-workers N``            ``AMRA_MAP_WORKERS``              cores (processes for map cells)
+``--map-workers N``            ``AMRA_MAP_WORKERS``              1 (1: in the map thread; N: processes)
 ``--dask-scheduler ADDR``      ``AMRA_DASK_SCHEDULER``           none (local processes)
 ``--max-run-s S``              ``AMRA_MAX_RUN_S``                120 (per-session cap on run length)
 ``--max-message-bytes B``      ``AMRA_MAX_MESSAGE_BYTES``        4 MiB (largest websocket message in)
@@ -34,7 +34,8 @@ The basic-auth file is JSON, ``{"user": "password", ...}`` (a password is never 
 command line, where ``ps`` shows it). Secrets reach Panel through its environment, not its argv.
 
 The app reads its settings from the environment of the server process: ``AMRA_STORE``,
-``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S``.
+``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S`` (and, passed through unchanged,
+``AMRA_STREAM_PERIOD_MS``: each session's page-update period [ms], default 50).
 """
 from __future__ import annotations
 

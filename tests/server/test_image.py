@@ -87,7 +87,8 @@ def test_runs_as_non_root_and_uses_the_build_cache(container):
     r = run_in(name, "sh", "-c", "touch /opt/amra/amra_core/x 2>&1; echo rc=$?")
     assert "rc=0" not in r.stdout
     # a fresh process: every kernel is loaded from the build-time cache, none compiled and saved
-    r = run_in(name, "python3", "app/warmup.py", env={"NUMBA_DEBUG_CACHE": "1"}, timeout=300)
+    r = run_in(name, "python3", "app/warmup.py", env={"NUMBA_DEBUG_CACHE": "1", "AMRA_STORE": "/tmp/s.sqlite"},
+               timeout=300)
     assert r.returncode == 0, r.stderr
     assert "data loaded from" in r.stdout
     assert "data saved to" not in r.stdout, "kernels were recompiled at run time: the build's cache was not used"
@@ -96,8 +97,9 @@ def test_runs_as_non_root_and_uses_the_build_cache(container):
 def test_serves_page_liveness_healthcheck_and_stream(container, chromium_args):
     name, data = container
     port = free_port()
-    argv = ["buildah", "run", "--isolation", "chroot", "-e", f"AMRA_PORT={port}", "-v", f"{data}:/data",
-            name, "amra", "serve"]
+    # (buildah run shadows a bind mount onto a VOLUME path with the container's own volume, so the
+    # store is looked for in that volume afterwards, not in a host directory)
+    argv = ["buildah", "run", "--isolation", "chroot", "-e", f"AMRA_PORT={port}", name, "amra", "serve"]
     srv = ServerProcess(argv, log=data.parent / "container.log")
     base = f"http://127.0.0.1:{port}"
     try:
@@ -123,4 +125,6 @@ def test_serves_page_liveness_healthcheck_and_stream(container, chromium_args):
         srv.stop()
         log = srv.log_text()
     assert "AMRA dashboard at http://localhost:" in log
-    assert (data / "amra-store.sqlite").exists(), f"no store on the volume; server log:\n{log[-2000:]}"
+    r = run_in(name, "python3", "-c", "import sqlite3; c = sqlite3.connect('file:/data/amra-store.sqlite?mode=ro', "
+               "uri=True); print(hex(c.execute('PRAGMA application_id').fetchone()[0]))")
+    assert r.stdout.strip() == "0x414d5241", f"no AMRA store on the /data volume: {r.stderr}\n{log[-2000:]}"
