@@ -37,7 +37,8 @@ T_END_MAX_S = 600.0  #: longest run [s] (as ``amra simulate --t-end``): 240 000 
 #: fem-coupled state), so a UI stays responsive and a mistyped span cannot exhaust memory
 MAX_CHUNK_ROWS = 40_000
 #: states that end a run; ``finished`` (t_end reached by :meth:`Simulation.run`) can be continued
-TERMINAL_STATUSES = ("numerical-failure", "rotor-stopped", "overspeed-stop")
+#: ``not-started``: no trimmed state and no branch end existed (the verdict is ``no-autorotation``)
+TERMINAL_STATUSES = ("numerical-failure", "rotor-stopped", "overspeed-stop", "not-started")
 
 
 def _positive(name: str, value, hi: float, why: str = "") -> float:
@@ -121,8 +122,9 @@ class Simulation:
                                    f"switched on at t = 0")
                 # keep the branch-end flight controls (tilt, holds) but the requested structure
                 self.model = _with_controls_of(self.model, tr.model)
-        else:
-            raise RuntimeError(f"no trimmed state to start from: {tr.reason}")
+        else:  # nothing to start from: a run that never starts, whose verdict is the trim's
+            self._not_started(tr)
+            return
         self.omega_ref = float(tr.state[Y_OMEGA])
         self.y = transfer_state(tr.state, tr.model, self.model)
         self.reference_row = self._row(self.y)
@@ -136,6 +138,15 @@ class Simulation:
         self._chunks: list = []
         self._states: list = []  # (states, model whose layout they are in)
         self.wall_time_s = 0.0
+
+    def _not_started(self, tr: TrimResult) -> None:
+        self.start_note = f"not started: no trimmed state to start from, not even a branch end ({tr.reason})"
+        self.omega_ref = float("nan")
+        self.y = np.zeros(self.model.n_y)
+        self.reference_row = np.full(len(HISTORY_COLUMNS), np.nan)
+        self.t, self.dt, self.record_every, self.record_interval_s = 0.0, RECORD_INTERVAL_S, 1, RECORD_INTERVAL_S
+        self.status = "not-started"
+        self._chunks, self._states, self.wall_time_s = [], [], 0.0
 
     # ------------------------------------------------------------------ stepping
     def advance(self, n_steps: Optional[int] = None, span_s: Optional[float] = None) -> np.ndarray:
@@ -212,6 +223,9 @@ class Simulation:
         stays uniformly sampled). A rejected value leaves the run unchanged."""
         rotor = self.case.rotor.with_overrides(gj_nm2=gj_nm2, x_ea=x_ea, x_cg=x_cg)
         new = _with_controls_of(compile_model(rotor, self.case.flight, self.case.settings), self.model)
+        if self.status == "not-started":  # nothing runs: only the description changes
+            self.case, self.model, self.y = replace(self.case, rotor=rotor), new, np.zeros(new.n_y)
+            return
         y = transfer_state(self.y, self.model, new)
         _keep_teeter(y, new, *(v[0] for v in self.model.physical(self.y)))
         kernel_guard.check_state(y, new.arrays)
@@ -266,6 +280,9 @@ class Simulation:
 
     def verdict(self) -> Verdict:
         """Verdict on the run so far (model-notes §5); ``undetermined`` before any data."""
+        if self.status == "not-started":
+            return Verdict("no-autorotation", None, None, None,
+                           explanation=self.trim.reason or "no trimmed state to start from")
         if not self._chunks or len(self.history) == 0:
             return Verdict("undetermined", None, None, None,
                            explanation="no data yet: call advance() or run() before asking for a verdict")

@@ -177,3 +177,19 @@ def test_cli_validate_json(capsys, tmp_path, monkeypatch):
     assert d["failures"] == [c["id"] for c in d["cases"] if c["status"] in ("fail", "error")]
     assert d["report"].endswith("report.html") and (tmp_path / "report.html").is_file()
     assert {"id", "status", "value", "reference"} <= set(d["cases"][0])
+
+
+def test_no_trim_and_no_branch_end_is_a_verdict_not_an_exception(mccutcheon):
+    """Raised a bare RuntimeError('no trimmed state to start from') before (found by hypothesis in
+    test_properties): the Simulation exists, never starts, and says why."""
+    from amra_core.trim import TrimResult
+    tr = TrimResult("no-autorotation", reason="no steady autorotation even for a 30x stiffer blade")
+    sim = Simulation(Case(mccutcheon), trim_result=tr)
+    assert sim.status == "not-started" and "not started" in sim.start_note
+    assert sim.advance(span_s=0.1).shape == (0, len(sim.history[0]) if len(sim.history) else 16)
+    assert sim.run() is sim and sim.status == "not-started"
+    v = sim.verdict()
+    assert v.verdict == "no-autorotation" and "30x stiffer" in v.explanation
+    sim.set_parameters(gj_nm2=400.0)
+    assert sim.status == "not-started" and len(sim.y) == sim.model.n_y
+    assert sim.spanwise_last_revolution() == {}

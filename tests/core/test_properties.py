@@ -550,10 +550,7 @@ def test_api_extreme_parameters(rss_bound, paper, fid, case):
     outcome_of(f"api: {fid}", "api", go)
 
 
-@pytest.mark.xfail(strict=True, raises=RuntimeError,
-                   reason="open (simulation.py, live-solver): Simulation raises a bare RuntimeError 'no trimmed "
-                          "state to start from' instead of a verdict or a project error (found by hypothesis)")
-def test_api_no_trim_state_is_a_project_error(paper):
+def test_api_no_trim_state_is_a_project_error(paper):  # fixed in simulation.py (live-solver): a verdict
     try:
         _api_run(paper, "rigid", 1.0, 0.0, 0.0, None, dict(aero="theodorsen", inflow="uniform", n_elements=1), 1,
                  None)
