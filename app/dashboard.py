@@ -9,6 +9,7 @@ map subscription (:meth:`Dashboard.close`).
 from __future__ import annotations
 
 import queue
+import time
 from typing import Optional
 
 import numpy as np
@@ -64,6 +65,7 @@ class Dashboard(pn.viewable.Viewer):
         self.run_status = pn.pane.Markdown("**Run:** idle", name="run-status")
         self.live_note = pn.pane.Markdown("", name="live-note")
         self._ticks = 0
+        self._next_pump = 0.0
         self._locus_key = None
         self._periodic = None
         self._closed = False
@@ -188,6 +190,17 @@ class Dashboard(pn.viewable.Viewer):
                 self.notify(f"no map for this case: {exc}")
 
     # ------------------------------------------------------------------ the pump (event loop)
+    def tick(self) -> None:
+        """The periodic callback: pump, but leave the event loop at least half of its time for
+        user input (a slider release must not queue behind plot updates on a loaded server)."""
+        now = time.perf_counter()
+        if now < self._next_pump:
+            return
+        self.pump()
+        spent = time.perf_counter() - now
+        # idle for as long as the pump took (capped, so a slow update cannot starve the stream)
+        self._next_pump = now + min(0.25, max(0.0, 2.0 * spent - PUMP_MS / 1000.0))
+
     def pump(self) -> int:
         """Drain the outbox and update the page; returns the number of rows streamed."""
         frames = []
@@ -265,7 +278,7 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ lifecycle
     def start_periodic(self) -> None:
-        self._periodic = pn.state.add_periodic_callback(self.pump, period=PUMP_MS)
+        self._periodic = pn.state.add_periodic_callback(self.tick, period=PUMP_MS)
 
     def close(self, *args) -> None:
         if self._closed:

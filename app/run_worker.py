@@ -24,7 +24,8 @@ import numpy as np
 from amra_core.simulation import Case, Simulation
 
 TICK_S = 0.05  #: wall-clock period of a chunk [s]: 20 chunks per second
-MAX_ROWS_PER_CHUNK = 40  #: rows posted per chunk (decimated; the full history is kept by the Simulation)
+MAX_ROWS_PER_CHUNK = 40  #: rows posted per chunk at most (the full history is kept by the Simulation)
+STREAM_RATE_HZ = 200.0  #: rows posted per simulated second (>= 7 per period of a 28 Hz torsion mode)
 DISC_PERIOD_S = 1.0  #: wall-clock period of the disc and verdict updates during a run [s]
 
 
@@ -115,7 +116,8 @@ class RunWorker:
                         post("error", {"run_id": run_id, "text": f"could not apply {pend} mid-run: {exc}"})
                 with np.errstate(all="ignore"):
                     rows = sim.advance(span_s=min(speed * self.tick_s, t_end - sim.t))
-                post("rows", {"run_id": run_id, "rows": _decimate(rows, MAX_ROWS_PER_CHUNK), "gj_nm2": gj,
+                n_keep = min(MAX_ROWS_PER_CHUNK, max(2, int(round(STREAM_RATE_HZ * speed * self.tick_s))))
+                post("rows", {"run_id": run_id, "rows": _decimate(rows, n_keep), "gj_nm2": gj,
                               "t_s": sim.t})
                 now = time.perf_counter()
                 if now - last_disc >= DISC_PERIOD_S:
