@@ -32,6 +32,10 @@ AIRFOIL_FILES = {
     "naca0012_sheldahl360k": "naca0012_sheldahl_klimas_re360k.dat",  # Re 3.6e5, no Cm
 }
 
+#: Tables of symmetric sections whose attached range is symmetrised on loading, with the
+#: half-range [deg] (see :func:`symmetrised` and assets/airfoils/README.md).
+SYMMETRISE_DEG = {"naca0012_critzos": 15.0}
+
 MACH_CLIP = 0.7  #: Mach number at which the Prandtl-Glauert factor is capped [-].
 PG_FULL_DEG = 10.0  #: |alpha| up to which the full Prandtl-Glauert factor applies [deg].
 PG_NONE_DEG = 20.0  #: |alpha| from which no Prandtl-Glauert factor applies [deg].
@@ -104,7 +108,7 @@ class AirfoilArrays(NamedTuple):
     cm: np.ndarray
 
 
-def load_airfoil(name: str = "naca0012_critzos") -> AirfoilTable:
+def load_airfoil(name: str = "naca0012_critzos", raw: bool = False) -> AirfoilTable:
     """Read a shipped table from ``assets/airfoils``.
 
     Parameters
@@ -112,6 +116,10 @@ def load_airfoil(name: str = "naca0012_critzos") -> AirfoilTable:
     name : str
         One of :data:`AIRFOIL_FILES`: ``"naca0012_critzos"`` (default; NACA TN 3361,
         Re 1.8e6, Cl/Cd/Cm) or ``"naca0012_sheldahl360k"`` (SAND80-2114, Re 3.6e5, no Cm).
+    raw : bool
+        False (default): tables listed in :data:`SYMMETRISE_DEG` come back with their attached
+        range symmetrised (:func:`symmetrised`), as the solver uses them. True: the file's
+        points as digitised.
 
     Returns
     -------
@@ -136,8 +144,40 @@ def load_airfoil(name: str = "naca0012_critzos") -> AirfoilTable:
         raise ValueError(f"airfoil {name!r}: expected 3 or 4 columns (alpha, Cl, Cd[, Cm])")
     has_cm = data.shape[1] == 4
     cm = data[:, 3] if has_cm else np.zeros(len(data))
-    return AirfoilTable(name, origin, tuple(data[:, 0]), tuple(data[:, 1]), tuple(data[:, 2]),
-                        tuple(cm), has_cm)
+    table = AirfoilTable(name, origin, tuple(data[:, 0]), tuple(data[:, 1]), tuple(data[:, 2]),
+                         tuple(cm), has_cm)
+    if not raw and name in SYMMETRISE_DEG:
+        table = symmetrised(table, SYMMETRISE_DEG[name])
+    return table
+
+
+def symmetrised(table: AirfoilTable, limit_deg: float) -> AirfoilTable:
+    """The table of a symmetric section with its range ``|alpha| <= limit_deg`` made symmetric:
+    Cl odd and Cd even, both taken from the positive-alpha branch (mirrored onto negative
+    alpha), and Cm replaced by its odd part ``(Cm(a) - Cm(-a))/2`` (so a constant offset, as the
+    digitised Critzos file has from -9 to 15 deg, becomes 0). Every point in the range needs its
+    mirror point in the table. Why the positive branch: assets/airfoils/README.md."""
+    a = np.asarray(table.alpha_deg)
+    cl, cd, cm = (np.array(v, dtype=float) for v in (table.cl, table.cd, table.cm))
+    inside = np.flatnonzero(np.abs(a) <= limit_deg + 1e-12)
+    partner = {}
+    for i in inside:
+        j = np.flatnonzero(np.abs(a + a[i]) <= 1e-9)
+        if j.size != 1:
+            raise ValueError(f"airfoil {table.name!r}: cannot symmetrise, no point at alpha = {-a[i]} deg "
+                             f"mirroring {a[i]} deg")
+        partner[i] = int(j[0])
+    new_cl, new_cd, new_cm = cl.copy(), cd.copy(), cm.copy()
+    for i, j in partner.items():
+        pos = i if a[i] >= 0 else j
+        sgn = 1.0 if a[i] >= 0 else -1.0
+        new_cl[i] = sgn * cl[pos] if a[i] != 0 else 0.0
+        new_cd[i] = cd[pos]
+        new_cm[i] = 0.5 * (cm[i] - cm[j])
+    origin = (f"{table.origin} [symmetrised for |alpha| <= {limit_deg:g} deg on loading: Cl, Cd "
+              f"from the positive branch, Cm odd part; raw points: load_airfoil(raw=True)]")
+    return AirfoilTable(table.name, origin, table.alpha_deg, tuple(new_cl), tuple(new_cd), tuple(new_cm),
+                        table.has_cm)
 
 
 def compile_airfoil(table: AirfoilTable, step_deg: float = 0.25) -> AirfoilArrays:

@@ -16,17 +16,80 @@ batch form: submit them all and yield ``(arg, Outcome)`` as they complete.
 * :class:`DaskExecutor`: ``distributed.Client(address)`` (``pip install 'amra[dask]'``); the workers
   must be able to import ``amra_core``.
 
-An exception inside ``fn`` or a dead worker becomes ``Outcome(ok=False)``; it never escapes ``wait``.
+An exception inside ``fn`` becomes ``Outcome(ok=False)``; it never escapes ``wait``.
+
+A call whose worker *died* (segfault, out of memory, ``kill -9``; a dask ``KilledWorker``) is not
+the call's answer: the local pool and dask resubmit it on fresh workers, transparently, up to
+``max_retries`` times (default :data:`MAX_RETRIES`). Only then ``wait`` returns
+``Outcome(ok=False, value=WorkerDied(...))``; :attr:`Outcome.worker_died` tells such outcomes
+apart, and callers must not store them as results.
+
+Local pool workers watch their parent: when it dies (``kill -9``, SIGTERM), they exit within about
+a second (:func:`_watch_parent`), so no orphaned workers or resource tracker are left behind.
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
 import multiprocessing as mp
 import os
+import threading
 import time
 from collections import deque
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Iterator, Optional
+
+
+MAX_RETRIES = 3  #: resubmissions of a call whose worker died, before it is reported failed
+#: ``--workers`` above this multiple of the CPU count only adds memory and contention
+MAX_WORKERS_PER_CORE = 4
+
+
+class WorkerDied(RuntimeError):
+    """The worker process running a call died (crash, out of memory, killed) every time it was tried."""
+
+
+def worker_cap() -> int:
+    """The most local worker processes allowed: :data:`MAX_WORKERS_PER_CORE` per CPU core."""
+    return MAX_WORKERS_PER_CORE * (os.cpu_count() or 1)
+
+
+def cap_workers(workers: Optional[int]) -> tuple[Optional[int], str]:
+    """``(workers, message)``: ``workers`` capped at :func:`worker_cap`; ``message`` says so (or is '')."""
+    cap = worker_cap()
+    if workers is not None and workers > cap:
+        return cap, (f"--workers {workers} is more than {MAX_WORKERS_PER_CORE} per CPU core "
+                     f"({os.cpu_count() or 1} cores): using {cap}")
+    return workers, ""
+
+
+def _watch_parent(parent_pid: int, poll_s: float = 0.5) -> None:
+    """Worker initializer: exit this worker as soon as ``parent_pid`` is no longer its parent.
+
+    On Linux ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` is not used on its own because it fires when the
+    parent *thread* that started the worker ends (a dashboard thread can create a pool another one
+    uses); a daemon thread polling ``os.getppid()`` is process-level and portable."""
+    def watch():
+        while True:
+            if os.getppid() != parent_pid:
+                os._exit(0)  # parent gone: we were re-parented (to init or a subreaper)
+            time.sleep(poll_s)
+
+    if os.getppid() != parent_pid:
+        os._exit(0)
+    try:  # Ctrl-C reaches the whole process group: the parent alone decides, and stops us
+        import signal
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except (ValueError, OSError):
+        pass
+    threading.Thread(target=watch, name="amra-parent-watch", daemon=True).start()
+
+
+def _is_worker_death(exc: BaseException) -> bool:
+    """True for the exceptions that mean "the worker died", not "the call failed"."""
+    if isinstance(exc, cf.process.BrokenProcessPool):
+        return True
+    name = type(exc).__name__
+    return name in ("KilledWorker", "CommClosedError", "WorkerDied") and not isinstance(exc, WorkerDied)
 
 
 @dataclass(frozen=True)
@@ -43,6 +106,11 @@ class Outcome:
         if self.ok:
             return ""
         return f"{type(self.value).__name__}: {self.value}"
+
+    @property
+    def worker_died(self) -> bool:
+        """The call has no answer because its worker died on every try (never store it)."""
+        return not self.ok and isinstance(self.value, WorkerDied)
 
 
 class CellExecutor:
@@ -118,49 +186,92 @@ class SerialExecutor(CellExecutor):
 
 
 class LocalPoolExecutor(CellExecutor):
-    """``workers`` local processes (default ``os.cpu_count()``)."""
+    """``workers`` local processes (default ``os.cpu_count()``, at most :func:`worker_cap`).
+
+    A call whose worker died is resubmitted on a fresh pool up to ``max_retries`` times (every call
+    in flight when a worker dies is lost with it, so all of them are retried); after that its
+    outcome is ``WorkerDied``. Workers exit when this process dies."""
 
     name = "local"
 
-    def __init__(self, workers: Optional[int] = None, start_method: str = "spawn"):
+    def __init__(self, workers: Optional[int] = None, start_method: str = "spawn",
+                 max_retries: int = MAX_RETRIES):
         n = (os.cpu_count() or 1) if workers is None else workers
-        if not isinstance(n, int) or n < 1:
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise ValueError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
+        if n > worker_cap():
+            raise ValueError(f"workers = {workers!r} is not allowed: at most {worker_cap()} "
+                             f"({MAX_WORKERS_PER_CORE} per CPU core)")
         self.workers = n
+        self.max_retries = int(max_retries)
         self._ctx = mp.get_context(start_method)
-        self._pool = cf.ProcessPoolExecutor(max_workers=n, mp_context=self._ctx)
-        self._futures: dict = {}
+        self._futures: dict = {}  # future -> [fn, arg, tag, deaths]
+        self._pool = self._new_pool()
+        self.restarts = 0
+        self._abandoned = False
+
+    def _new_pool(self):
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
+                                      initializer=_watch_parent, initargs=(os.getpid(),))
+
+    def _submit(self, item):
+        try:
+            fut = self._pool.submit(item[0], item[1])
+        except (cf.process.BrokenProcessPool, RuntimeError):  # broken, or shut down by a restart
+            self._restart()
+            fut = self._pool.submit(item[0], item[1])
+        self._futures[fut] = item
 
     def submit(self, fn, arg, tag=None):
-        try:
-            fut = self._pool.submit(fn, arg)
-        except cf.process.BrokenProcessPool:
-            self._restart()
-            fut = self._pool.submit(fn, arg)
-        self._futures[fut] = tag
+        self._submit([fn, arg, tag, 0])
 
     def _restart(self):
-        self._pool.shutdown(wait=False, cancel_futures=True)
-        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx)
+        old = self._pool
+        self._pool = self._new_pool()
+        self.restarts += 1
+        _terminate_pool(old)
 
     def wait(self, timeout=None):
-        if not self._futures:
-            return []
-        done, _ = cf.wait(list(self._futures), timeout=timeout, return_when=cf.FIRST_COMPLETED)
-        out, broken = [], False
-        for fut in done:
-            tag = self._futures.pop(fut)
-            if fut.cancelled():
-                continue
-            exc = fut.exception()
-            if exc is None:
-                out.append(Outcome(tag, True, fut.result()))
-            else:
-                broken |= isinstance(exc, cf.process.BrokenProcessPool)
-                out.append(Outcome(tag, False, exc))
-        if broken:  # a worker died (segfault, out of memory): fresh pool for what follows
-            self._restart()
-        return out
+        t_end = None if timeout is None else time.monotonic() + timeout
+        while self._futures:
+            left = None if t_end is None else max(0.0, t_end - time.monotonic())
+            done, _ = cf.wait(list(self._futures), timeout=left, return_when=cf.FIRST_COMPLETED)
+            out, retry, broken = [], [], False
+            for fut in done:
+                item = self._futures.pop(fut)
+                if fut.cancelled():
+                    continue
+                exc = fut.exception()
+                if exc is None:
+                    out.append(Outcome(item[2], True, fut.result()))
+                elif _is_worker_death(exc):
+                    broken = True
+                    item[3] += 1
+                    if item[3] > self.max_retries:
+                        out.append(Outcome(item[2], False, WorkerDied(
+                            f"the worker process died on each of {item[3]} tries ({type(exc).__name__}); "
+                            f"the call was not retried further")))
+                    else:
+                        retry.append(item)
+                else:
+                    out.append(Outcome(item[2], False, exc))
+            if broken:
+                # the broken pool fails every call it holds: collect them, then one fresh pool for all
+                for fut in list(self._futures):
+                    if fut.done() and fut.exception() is not None and _is_worker_death(fut.exception()):
+                        item = self._futures.pop(fut)
+                        item[3] += 1
+                        retry.append(item)
+                for fut, item in list(self._futures.items()):  # still queued on the broken pool
+                    if not fut.done():
+                        self._futures.pop(fut)
+                        retry.append(item)
+                self._restart()
+                for item in retry:
+                    self._submit(item)
+            if out or (t_end is not None and time.monotonic() >= t_end):
+                return out
+        return []
 
     @property
     def n_pending(self):
@@ -168,46 +279,110 @@ class LocalPoolExecutor(CellExecutor):
 
     def cancel_pending(self):
         for fut in list(self._futures):
-            if fut.cancel():
-                self._futures.pop(fut)
-        self._futures.clear()  # running ones finish in the background; their results are dropped
+            if not fut.cancel():
+                self._abandoned = True  # running: its result is dropped; close() stops the worker
+        self._futures.clear()
 
     def close(self):
-        self._pool.shutdown(wait=False, cancel_futures=True)
+        if self._abandoned or self._futures:
+            _terminate_pool(self._pool)  # do not wait for cells nobody will read
+        else:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+        self._futures.clear()
+
+
+def _terminate_pool(pool) -> None:
+    """Shut ``pool`` down without waiting and stop its worker processes."""
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    try:
+        pool.shutdown(wait=False, cancel_futures=True)
+    except Exception:  # noqa: BLE001 - a broken pool may complain; its workers are stopped below
+        pass
+    for p in procs:
+        try:
+            if p.is_alive():
+                p.terminate()
+        except Exception:  # noqa: BLE001
+            pass
+    for p in procs:
+        try:
+            p.join(2.0)
+            if p.is_alive():
+                p.kill()
+        except Exception:  # noqa: BLE001
+            pass
+
+
+#: scheduler address schemes accepted by :class:`DaskExecutor`
+DASK_SCHEMES = ("tcp://", "tls://", "inproc://", "ucx://")
+
+
+def dask_security(address: str, tls_ca_file=None, tls_cert=None, tls_key=None):
+    """``distributed.Security`` for a ``tls://`` address, else None. The files come from the
+    arguments, else the environment (``AMRA_DASK_TLS_CA``, ``AMRA_DASK_TLS_CERT``,
+    ``AMRA_DASK_TLS_KEY``), else Dask's own configuration (``distributed.comm.tls.*``)."""
+    if not address.startswith("tls://"):
+        return None
+    from distributed.security import Security
+    ca = tls_ca_file or os.environ.get("AMRA_DASK_TLS_CA")
+    cert = tls_cert or os.environ.get("AMRA_DASK_TLS_CERT")
+    key = tls_key or os.environ.get("AMRA_DASK_TLS_KEY")
+    if not (ca or cert):
+        return Security(require_encryption=True)  # distributed.comm.tls.* from the Dask config
+    for what, f in (("CA", ca), ("certificate", cert), ("key", key)):
+        if f and not os.path.isfile(f):
+            raise ValueError(f"scheduler = {address!r}: TLS {what} file {f!r} does not exist")
+    return Security(tls_ca_file=ca, tls_client_cert=cert, tls_client_key=key or None, require_encryption=True)
 
 
 class DaskExecutor(CellExecutor):
-    """Calls run on a dask.distributed cluster: ``address`` of its scheduler (``tcp://host:8786``)
-    or an existing ``distributed.Client`` (``client=``, not closed by :meth:`close`)."""
+    """Calls run on a dask.distributed cluster: ``address`` of its scheduler (``tcp://host:8786``,
+    ``tls://host:8786`` with certificates, see :func:`dask_security`) or an existing
+    ``distributed.Client`` (``client=``, not closed by :meth:`close`).
+
+    Dask deserialises (unpickles) what it receives: use a cluster you trust, and ``tls://`` on a
+    shared network. A call whose worker died (``KilledWorker``, lost connection) is resubmitted up
+    to ``max_retries`` times, then reported as ``WorkerDied``."""
 
     name = "dask"
 
-    def __init__(self, address: Optional[str] = None, client=None, timeout_s: float = 30.0):
+    def __init__(self, address: Optional[str] = None, client=None, timeout_s: float = 30.0,
+                 max_retries: int = MAX_RETRIES, security=None):
         try:
             import distributed
         except ImportError:
             raise ImportError("running on a dask scheduler needs the 'distributed' package: "
                               "pip install 'amra[dask]'") from None
         self._distributed = distributed
+        self.max_retries = int(max_retries)
         if client is None:
-            if not address:
+            if not address or not isinstance(address, str):
                 raise ValueError("scheduler = '' is not allowed: give the scheduler address, e.g. tcp://host:8786")
+            if "://" in address and not address.startswith(DASK_SCHEMES):
+                raise ValueError(f"scheduler = {address!r} is not allowed: the address must start with "
+                                 f"{', '.join(DASK_SCHEMES)} (or be host:port)")
+            if security is None:
+                security = dask_security(address)
             try:
-                client = distributed.Client(address, timeout=timeout_s)
-            except (OSError, TimeoutError) as exc:
-                raise ValueError(f"scheduler = {address!r}: cannot connect ({exc})") from None
+                kw = {"security": security} if security is not None else {}
+                client = distributed.Client(address, timeout=timeout_s, **kw)
+            except (OSError, TimeoutError, ValueError, TypeError) as exc:
+                raise ValueError(f"scheduler = {address!r}: cannot connect ({type(exc).__name__}: {exc})") from None
             self._own = True
         else:
             self._own = False
         self.client = client
         self.workers = max(1, sum(w.get("nthreads", 1) for w in client.scheduler_info().get("workers", {}).values()))
-        self._futures: dict = {}
+        self._futures: dict = {}  # key -> (future, [fn, arg, tag, deaths])
         self._ac = distributed.as_completed()
 
-    def submit(self, fn, arg, tag=None):
-        fut = self.client.submit(fn, arg, pure=False)
-        self._futures[fut.key] = (fut, tag)
+    def _submit(self, item):
+        fut = self.client.submit(item[0], item[1], pure=False)
+        self._futures[fut.key] = (fut, item)
         self._ac.add(fut)
+
+    def submit(self, fn, arg, tag=None):
+        self._submit([fn, arg, tag, 0])
 
     def wait(self, timeout=None):
         if not self._futures:
@@ -217,15 +392,16 @@ class DaskExecutor(CellExecutor):
         while not out:
             batch = self._ac.next_batch(block=False)
             if not batch:
-                if t_end is not None and time.monotonic() >= t_end:
+                if not self._futures or (t_end is not None and time.monotonic() >= t_end):
                     return []
                 time.sleep(0.01)
                 continue
             for fut in batch:
-                item = self._futures.pop(fut.key, None)
-                if item is None:  # cancelled earlier
+                entry = self._futures.pop(fut.key, None)
+                if entry is None:  # cancelled earlier
                     continue
-                tag = item[1]
+                item = entry[1]
+                tag = item[2]
                 if fut.status == "finished":
                     out.append(Outcome(tag, True, fut.result()))
                 elif fut.status == "cancelled":
@@ -235,7 +411,16 @@ class DaskExecutor(CellExecutor):
                         exc = fut.exception()
                     except Exception as e:  # noqa: BLE001
                         exc = e
-                    out.append(Outcome(tag, False, exc if isinstance(exc, BaseException) else RuntimeError(str(exc))))
+                    if not isinstance(exc, BaseException):
+                        exc = RuntimeError(str(exc))
+                    if _is_worker_death(exc):
+                        item[3] += 1
+                        if item[3] <= self.max_retries:
+                            self._submit(item)
+                            continue
+                        exc = WorkerDied(f"the dask worker running it died on each of {item[3]} tries "
+                                         f"({type(exc).__name__}: {exc}); the call was not retried further")
+                    out.append(Outcome(tag, False, exc))
         return out
 
     @property
@@ -263,7 +448,7 @@ def make_executor(workers: Optional[int] = None, scheduler: Optional[str] = None
     in-process serial for ``workers=1``, else a local pool of ``workers`` processes."""
     if scheduler:
         return DaskExecutor(scheduler)
-    if workers is not None and (not isinstance(workers, int) or workers < 1):
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 1):
         raise ValueError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
     if workers == 1:
         return SerialExecutor()

@@ -4,6 +4,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Optional
 
+import numpy as np
+
 from .rotor import _check_number
 from .shapes import FIDELITIES
 
@@ -20,6 +22,15 @@ def _num(name, value, lo, hi):
         return _check_number(name, value, lo, hi)
     except ValueError as exc:
         raise SettingsError(str(exc)) from None
+
+
+def _integer(obj, field: str, label: str, lo: int, hi: int) -> None:
+    """Check an integer setting: a bool is not a number (``True`` is not 1 element); a NumPy
+    integer is stored as a Python int so the case key does not depend on the type."""
+    v = getattr(obj, field)
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or not lo <= v <= hi:
+        raise SettingsError(f"{label} = {v!r} is not allowed: must be an integer in [{lo}, {hi}]")
+    object.__setattr__(obj, field, int(v))
 
 
 @dataclass(frozen=True)
@@ -84,10 +95,8 @@ class SolverSettings:
             raise SettingsError(f"aero = {self.aero!r} is not allowed: choose one of {', '.join(AERO_MODELS)}")
         if self.inflow not in INFLOW_MODELS:
             raise SettingsError(f"inflow = {self.inflow!r} is not allowed: choose one of {', '.join(INFLOW_MODELS)}")
-        if not isinstance(self.n_elements, int) or not 1 <= self.n_elements <= 60:
-            raise SettingsError(f"elements = {self.n_elements!r} is not allowed: must be an integer in [1, 60]")
-        if not isinstance(self.n_stations, int) or not 4 <= self.n_stations <= 60:
-            raise SettingsError(f"stations = {self.n_stations!r} is not allowed: must be an integer in [4, 60]")
+        _integer(self, "n_elements", "elements", 1, 60)
+        _integer(self, "n_stations", "stations", 4, 60)
         if self.dt_s is not None:
             _num("dt_s", self.dt_s, 1e-6, 0.01)
         if self.max_mode_hz is not None:

@@ -18,8 +18,9 @@ import numpy as np
 from .airfoil import airfoil_coefficients
 from .jit import inline_kernel, kernel
 from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_Y_FIXED, P_A_SOUND,
-                    P_AERO, P_ALPHA_S, P_CLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
-                    P_INFLOW3, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_VH, S_A, S_C, S_R,
+                    P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
+                    P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
+                    P_VH, S_A, S_C, S_R,
                     S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD,
                     Y_ZETA0, Y_ZETAD0)
 
@@ -173,7 +174,9 @@ def rhs(y, dy, m, loads, work):
     mom_s = 0.0; mom_c = 0.0  # first moments of the normal force (sine and cosine of azimuth)
     a_sound = p[P_A_SOUND]
     hs, hc = inflow_gradients(y, m)
-    for b in range(2):
+    vacuum = p[P_VACUUM] > 0.5
+    n_blades = 0 if vacuum else 2
+    for b in range(n_blades):
         psib = psi + b * math.pi
         sp = math.sin(psib); cp = math.cos(psib)
         for j in range(nst):
@@ -199,47 +202,94 @@ def rhs(y, dy, m, loads, work):
             else:
                 lagm1 += (r - r0) * ffwd * wgt
             hforce += (-ffwd * sp - fup * wp * cp) * wgt
-    # structure: x'' = M^-1 (Q - (K0 + Omega^2 K2) x)
+    # Structure and rotor speed from one Lagrangian (docs/model-equations.md):
+    #   M x'' + g(x) Omega' = F_x = Q + Omega^2 f - (K0 + Omega^2 K2) x - C x'
+    #   J(x) Omega' + sum S_b zeta_b'' + g^T x'' = torque - Omega J' - x'^T H x' - sum S_b' zeta_b'
+    #   I_b zeta_b'' + S_b Omega' = lag moment + Omega^2 f_lag - (k_lag + Omega^2 k2_lag) zeta_b - c zeta_b'
+    #                               - Omega S_b' - I_b' zeta_b'
+    # with J = I_R + 2 f^T x - x^T K2 x + 2 f_lag sum zeta - k2_lag |zeta|^2, g = g0 + H x and the
+    # coned blade's lag coupling S_b(x) and inertia I_b(x) (plus their Coriolis forces on x),
+    # by eliminating x'' and zeta'' (u = M^-1 g is kept in dy[x'] until Omega' is known).
     om2 = om * om
+    z0 = y[Y_ZETA0]; z1 = y[Y_ZETA0 + 1]; zd0 = y[Y_ZETAD0]; zd1 = y[Y_ZETAD0 + 1]
+    fx = 0.0; xk2x = 0.0; jdot = 0.0; xhx = 0.0; uf = 0.0; ug = 0.0
+    xs0x = 0.0; xs1x = 0.0; xs0xd = 0.0; xs1xd = 0.0; xi0x = 0.0; xi1x = 0.0; xi0xd = 0.0; xi1xd = 0.0
     for i in range(ns):
-        f = work[i]
+        k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
+        s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
         for k in range(ns):
-            f -= (m.k0[i, k] + om2 * m.k2[i, k]) * y[x0 + k] + m.c[i, k] * y[xd0 + k]
+            q = y[x0 + k]; qd = y[xd0 + k]
+            k0x += m.k0[i, k] * q
+            k2x += m.k2[i, k] * q
+            cxd += m.c[i, k] * qd
+            hx += m.gyh[i, k] * q
+            hxd += m.gyh[i, k] * qd
+            ux += m.ugyh[i, k] * q
+            s0x += m.ls2[0, i, k] * q
+            s1x += m.ls2[1, i, k] * q
+            i0x += m.li2[0, i, k] * q
+            i1x += m.li2[1, i, k] * q
+        # flap-lag Coriolis: -d/dx of Omega S_b(x) zeta_b' + 1/2 I_b(x) zeta_b'^2
+        f = work[i] + om2 * (m.sf[i] - k2x) - k0x - cxd - om * (zd0 * s0x + zd1 * s1x) \
+            - zd0 * zd0 * i0x - zd1 * zd1 * i1x
         work[ns + i] = f
+        qi = y[x0 + i]; qdi = y[xd0 + i]
+        u = m.ugy0[i] + ux
+        dy[xd0 + i] = u
+        fx += m.sf[i] * qi
+        xk2x += qi * k2x
+        jdot += (m.sf[i] - k2x) * qdi
+        xhx += qdi * hxd
+        uf += u * f
+        ug += u * (m.gy0[i] + hx)
+        xs0x += qi * s0x; xs1x += qi * s1x; xs0xd += qdi * s0x; xs1xd += qdi * s1x
+        xi0x += qi * i0x; xi1x += qi * i1x; xi0xd += qdi * i0x; xi1xd += qdi * i1x
+    # rotor speed and lag: S_b = S - x^T S2_b x / 2, I_b = I_z - x^T I2_b x
+    k2lag = p[P_K2LAG]
+    klag = p[P_KLAG] + om2 * k2lag
+    clag = p[P_CLAG]
+    sl0 = p[P_SLAG] - 0.5 * xs0x; sl1 = p[P_SLAG] - 0.5 * xs1x
+    il0 = p[P_ILAG] - xi0x; il1 = p[P_ILAG] - xi1x
+    flag = om2 * p[P_FLAG]
+    # with S_b' = -x^T S2_b x', I_b' = -2 x^T I2_b x'
+    f1 = lagm0 + flag - klag * z0 - clag * zd0 + om * xs0xd + 2.0 * xi0xd * zd0
+    f2 = lagm1 + flag - klag * z1 - clag * zd1 + om * xs1xd + 2.0 * xi1xd * zd1
+    dy[Y_PSI] = om
+    if p[P_HOLD_OMEGA] > 0.5:
+        omd = 0.0
+    else:
+        jpol = p[P_IR] + 2.0 * fx - xk2x + 2.0 * p[P_FLAG] * (z0 + z1) - k2lag * (z0 * z0 + z1 * z1)
+        jdot = 2.0 * jdot + 2.0 * p[P_FLAG] * (zd0 + zd1) - 2.0 * k2lag * (z0 * zd0 + z1 * zd1)
+        f0 = torque - om * jdot - xhx + xs0xd * zd0 + xs1xd * zd1
+        omd = (f0 - sl0 * f1 / il0 - sl1 * f2 / il1 - uf) / (jpol - sl0 * sl0 / il0 - sl1 * sl1 / il1 - ug)
+    dy[Y_OMEGA] = omd
+    dy[Y_ZETAD0] = (f1 - sl0 * omd) / il0
+    dy[Y_ZETAD0 + 1] = (f2 - sl1 * omd) / il1
     for i in range(ns):
         acc = 0.0
         for k in range(ns):
             acc += m.minv[i, k] * work[ns + k]
         dy[x0 + i] = y[xd0 + i]
-        dy[xd0 + i] = acc
-    # rotor speed and lag
-    klag = p[P_KLAG] + om2 * p[P_K2LAG]
-    clag = p[P_CLAG]
-    f0 = torque
-    f1 = lagm0 - klag * y[Y_ZETA0] - clag * y[Y_ZETAD0]
-    f2 = lagm1 - klag * y[Y_ZETA0 + 1] - clag * y[Y_ZETAD0 + 1]
-    dy[Y_PSI] = om
-    if p[P_HOLD_OMEGA] > 0.5:
-        dy[Y_OMEGA] = 0.0
-        dy[Y_ZETAD0] = f1 / p[P_ILAG]
-        dy[Y_ZETAD0 + 1] = f2 / p[P_ILAG]
-    else:
-        li = m.lag_inv
-        dy[Y_OMEGA] = li[0, 0] * f0 + li[0, 1] * f1 + li[0, 2] * f2
-        dy[Y_ZETAD0] = li[1, 0] * f0 + li[1, 1] * f1 + li[1, 2] * f2
-        dy[Y_ZETAD0 + 1] = li[2, 0] * f0 + li[2, 1] * f1 + li[2, 2] * f2
-    dy[Y_ZETA0] = y[Y_ZETAD0]
-    dy[Y_ZETA0 + 1] = y[Y_ZETAD0 + 1]
+        dy[xd0 + i] = acc - dy[xd0 + i] * omd
+    dy[Y_ZETA0] = zd0
+    dy[Y_ZETA0 + 1] = zd1
     # vehicle descent and inflow
     fvert = thrust * ca - hforce * sa
     fhoriz = thrust * sa + hforce * ca
-    dy[Y_VD] = 0.0 if p[P_HOLD_VD] > 0.5 else p[P_G] - fvert / p[P_MASS]
     area = math.pi * R * R
-    vm = mass_flow(thrust, vx, -vup, y[Y_V0], rho, area)
-    if p[P_INFLOW3] > 0.5:
-        inflow_harmonics(y, dy, thrust, mom_s, mom_c, vx, vup, vm, rho, R)
+    if vacuum:  # no air: inflow, lag states and descent rate frozen
+        vm = 0.0
+        for i in range(N_Y_FIXED + 2 * ns, y.shape[0]):
+            dy[i] = 0.0
+        dy[Y_V0] = 0.0
+        dy[Y_VD] = 0.0
     else:
-        dy[Y_V0] = (thrust - 2.0 * rho * area * vm * y[Y_V0]) * 3.0 / (8.0 * rho * R * R * R)
+        dy[Y_VD] = 0.0 if p[P_HOLD_VD] > 0.5 else p[P_G] - fvert / p[P_MASS]
+        vm = mass_flow(thrust, vx, -vup, y[Y_V0], rho, area)
+        if p[P_INFLOW3] > 0.5:
+            inflow_harmonics(y, dy, thrust, mom_s, mom_c, vx, vup, vm, rho, R)
+        else:
+            dy[Y_V0] = (thrust - 2.0 * rho * area * vm * y[Y_V0]) * 3.0 / (8.0 * rho * R * R * R)
     loads[L_THRUST] = thrust; loads[L_TORQUE] = torque; loads[L_HFORCE] = hforce
     loads[L_FVERT] = fvert; loads[L_FHORIZ] = fhoriz; loads[L_VM] = vm
 

@@ -17,6 +17,7 @@ VERDICT_COLOURS = {
     "divergence": "#9467bd",
     "overspeed": "#ff7f0e",
     "no-autorotation": "#7f7f7f",
+    "windmill-brake": "#17becf",
     "failed": "#000000",
 }
 

@@ -26,7 +26,9 @@ from .structure import assemble
 P_RHO, P_A_SOUND, P_G, P_MASS, P_R, P_R0, P_VH, P_ALPHA_S = range(8)
 P_HOLD_OMEGA, P_HOLD_VD, P_AERO, P_IR, P_ILAG, P_SLAG, P_KLAG, P_K2LAG = range(8, 16)
 P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG, P_INFLOW3 = range(16, 22)
-N_P = 22
+P_VACUUM = 22  #: 1: no aerodynamic loads, inflow and descent frozen (conservation tests only)
+P_FLAG = 23  #: static lag moment per Omega^2 [kg m] (RotorStructure.f_lag)
+N_P = 24
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
@@ -57,12 +59,20 @@ class ModelArrays(NamedTuple):
     sht: np.ndarray  #: (2, n_st, n) elastic twist per coordinate
     tip: np.ndarray  #: (2 blades, 2 [flap, twist], n) tip displacement and twist per coordinate
     teeter: np.ndarray  #: (n,) teeter angle per coordinate
-    lag_inv: np.ndarray  #: inverse of the [Omega, zeta0, zeta1] inertia matrix (3 x 3)
+    lag_inv: np.ndarray  #: inverse of the [Omega, zeta0, zeta1] inertia matrix at x = 0 (3 x 3; the
+    #: kernel eliminates the state-dependent inertia itself, this stays for linear analyses)
     af_alpha0: float
     af_dalpha: float
     af_cl: np.ndarray
     af_cd: np.ndarray
     af_cm: np.ndarray
+    sf: np.ndarray  #: (n,) static pitch load per Omega^2 [kg m] (``f`` of :mod:`amra_core.structure`)
+    gy0: np.ndarray  #: (n,) gyroscopic coupling with the rotor speed at x = 0 (``g0``)
+    gyh: np.ndarray  #: (n, n) gyroscopic coupling per coordinate (``H``, symmetric)
+    ugy0: np.ndarray  #: (n,) minv @ gy0
+    ugyh: np.ndarray  #: (n, n) minv @ gyh
+    ls2: np.ndarray  #: (2, n, n) lag coupling per blade, S_b = S_lag - 1/2 x^T ls2[b] x
+    li2: np.ndarray  #: (2, n, n) lag inertia per blade, I_b = I_lag - x^T li2[b] x
 
 
 @dataclass(frozen=True)
@@ -168,10 +178,14 @@ def apparent_mass(rotor: Rotor, rho: float):
 
 
 def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
-                  settings: SolverSettings = SolverSettings()) -> CompiledModel:
+                  settings: SolverSettings = SolverSettings(), vacuum: bool = False) -> CompiledModel:
+    """Compile a case. ``vacuum=True`` (conservation tests): no aerodynamic loads and no apparent
+    mass, descent rate and inflow frozen, so only the rotor's own mechanics remain (with the rotor
+    speed free, total energy and angular momentum about the shaft are then conserved, see
+    :func:`mechanical_energy`)."""
     mesh = make_mesh(settings.fidelity, rotor.root_cutout_m, rotor.radius_m, settings.n_elements)
     rho = flight.density_kg_m3
-    s = assemble(rotor, mesh, added_mass=apparent_mass(rotor, rho))
+    s = assemble(rotor, mesh, added_mass=None if vacuum else apparent_mass(rotor, rho))
     st_ = rotor.stations
 
     gx, gw = np.polynomial.legendre.leggauss(settings.n_stations)
@@ -215,6 +229,8 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_NQ], p[P_NST], p[P_NS] = mesh.n_q, len(r), phi.shape[1]
     zeta = rotor.structural_damping_ratio
     p[P_INFLOW3] = 1.0 if settings.inflow == "three-state" else 0.0
+    p[P_VACUUM] = 1.0 if vacuum else 0.0
+    p[P_FLAG] = s.f_lag
     p[P_CLAG] = 2.0 * zeta * np.sqrt(s.k_lag * s.I_lag)  # blade lag mode clamped at the hub
     lag_m = np.array([[s.I_R, s.S_lag, s.S_lag], [s.S_lag, s.I_lag, 0.0], [s.S_lag, 0.0, s.I_lag]])
     af = compile_airfoil(load_airfoil(rotor.airfoil))
@@ -223,8 +239,60 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
         shw=np.ascontiguousarray(shw), shd=np.ascontiguousarray(shd), sht=np.ascontiguousarray(sht),
         tip=np.ascontiguousarray(tip), teeter=np.ascontiguousarray(teeter), lag_inv=np.linalg.inv(lag_m),
         af_alpha0=af.alpha0_rad, af_dalpha=af.dalpha_rad, af_cl=af.cl, af_cd=af.cd, af_cm=af.cm,
+        sf=np.ascontiguousarray(phi.T @ s.f), gy0=np.ascontiguousarray(phi.T @ s.g0),
+        gyh=np.ascontiguousarray(phi.T @ s.H @ phi), ugy0=np.ascontiguousarray(minv @ (phi.T @ s.g0)),
+        ugyh=np.ascontiguousarray(minv @ (phi.T @ s.H @ phi)),
+        ls2=np.ascontiguousarray(np.array([phi.T @ s.S2[b] @ phi for b in range(2)])),
+        li2=np.ascontiguousarray(np.array([phi.T @ s.I2[b] @ phi for b in range(2)])),
     )
     return CompiledModel(arrays, mesh.n_q, phi.shape[1], len(r), s.kinds, s, phi, phi_pinv, rotor, flight, settings)
+
+
+def polar_inertia(model: CompiledModel, y: np.ndarray) -> float:
+    """Polar inertia of the deflected rotor about the shaft [kg m^2]:
+    ``J = I_R + 2 f^T x - x^T K2 x + 2 f_lag (zeta0 + zeta1) - k2_lag (zeta0^2 + zeta1^2)``
+    (docs/model-equations.md)."""
+    a = model.arrays
+    x = y[model.x_slice()]
+    z = y[Y_ZETA0:Y_ZETA0 + 2]
+    return float(a.p[P_IR] + 2.0 * a.sf @ x - x @ a.k2 @ x + 2.0 * a.p[P_FLAG] * z.sum()
+                 - a.p[P_K2LAG] * (z @ z))
+
+
+def lag_inertias(model: CompiledModel, y: np.ndarray):
+    """Per blade (lag coupling S_b, lag inertia I_b) [kg m^2] of the deflected blade."""
+    a = model.arrays
+    x = y[model.x_slice()]
+    S = np.array([a.p[P_SLAG] - 0.5 * x @ a.ls2[b] @ x for b in range(2)])
+    I = np.array([a.p[P_ILAG] - x @ a.li2[b] @ x for b in range(2)])
+    return S, I
+
+
+def angular_momentum(model: CompiledModel, y: np.ndarray) -> float:
+    """Angular momentum of the rotor about the shaft [kg m^2/s]:
+    ``Omega J(x) + sum_b S_b(x) zeta_b' + (g0 + H x)^T x'``."""
+    a = model.arrays
+    x, xd = y[model.x_slice()], y[model.xd_slice()]
+    g = a.gy0 + a.gyh @ x
+    S, _ = lag_inertias(model, y)
+    return float(y[Y_OMEGA] * polar_inertia(model, y) + S @ y[Y_ZETAD0:Y_ZETAD0 + 2] + g @ xd)
+
+
+def mechanical_energy(model: CompiledModel, y: np.ndarray) -> float:
+    """Total mechanical energy of the rotor [J] (kinetic, in the inertial frame, plus strain):
+    ``1/2 x'^T M x' + 1/2 sum I_b zeta_b'^2 + 1/2 Omega^2 J + Omega (sum S_b zeta_b' + g^T x')
+    + 1/2 x^T K0 x + 1/2 k_lag |zeta|^2``. The structural mass is recovered from ``minv``, so the
+    value is the mechanical energy only for a ``vacuum`` model (no apparent mass)."""
+    a = model.arrays
+    x, xd = y[model.x_slice()], y[model.xd_slice()]
+    z, zd = y[Y_ZETA0:Y_ZETA0 + 2], y[Y_ZETAD0:Y_ZETAD0 + 2]
+    om = y[Y_OMEGA]
+    M = np.linalg.inv(a.minv)
+    g = a.gy0 + a.gyh @ x
+    S, I = lag_inertias(model, y)
+    kin = 0.5 * xd @ M @ xd + 0.5 * I @ zd**2 + 0.5 * om**2 * polar_inertia(model, y) \
+        + om * (S @ zd + g @ xd)
+    return float(kin + 0.5 * x @ a.k0 @ x + 0.5 * a.p[P_KLAG] * (z @ z))
 
 
 def structural_damping(s, zeta: float) -> np.ndarray:

@@ -11,11 +11,16 @@ and CG overrides that the dashboard sliders set.
 """
 from __future__ import annotations
 
+import copy
 import math
 from dataclasses import dataclass, field, replace, asdict
 from typing import Optional
 
 import numpy as np
+
+
+#: the largest chord allowed, as a fraction of the tip radius (blade aspect ratio R/c >= 4)
+MAX_CHORD_FRACTION = 0.25
 
 
 class RotorError(ValueError):
@@ -56,6 +61,23 @@ STATION_FIELDS = {
 }
 
 
+#: a section's inertia about its own CG must be at least this fraction of the parallel-axis term
+#: m ((x_cg - x_ea) c)^2: exactly at the bound the section is a line mass and the mass matrix is singular
+INERTIA_MARGIN = 1e-3
+
+
+def inertia_message(st: "BladeStations", i: int, need: float, x_ea=None, x_cg=None) -> str:
+    ea = st.x_ea[i] if x_ea is None else x_ea
+    cg = st.x_cg[i] if x_cg is None else x_cg
+    m, c, inertia = st.mass_kg_m[i], st.chord_m[i], st.torsional_inertia_kg_m[i]
+    d_max = math.sqrt(inertia / (m * (1.0 + INERTIA_MARGIN))) / c
+    return (f"x_cg = {cg!r} with x_ea = {ea!r} is not allowed at station {i} (r = {st.r_m[i]:g} m): the "
+            f"torsional inertia about the elastic axis, torsional_inertia_kg_m = {inertia:.6g} kg m^2/m, must be "
+            f"at least m ((x_cg - x_ea) c)^2 = {need:.6g} kg m^2/m (mass_kg_m = {m:g}, chord_m = {c:g}) or no "
+            f"real mass distribution has it; here |x_cg - x_ea| must be below {d_max:.4f} chord "
+            f"(x_cg in [{max(0.0, ea - d_max):.4f}, {min(1.0, ea + d_max):.4f}] for this EA), or raise the inertia")
+
+
 @dataclass(frozen=True)
 class BladeStations:
     """Spanwise blade properties at stations, root to tip; linear between stations."""
@@ -92,6 +114,23 @@ class BladeStations:
         for i in range(1, len(r)):
             if not r[i] > r[i - 1]:
                 _fail(f"stations.r_m[{i}]", r[i], f"stations must be in increasing order of radius (> {r[i - 1]})")
+        i, need = self.inertia_violation()
+        if i is not None:
+            raise RotorError(inertia_message(self, i, need))
+
+    def inertia_violation(self, x_ea=None, x_cg=None):
+        """``(station, bound)`` of the first station whose torsional inertia about the EA is below
+        the parallel-axis bound m ((x_cg - x_ea) c)^2 (times 1 + :data:`INERTIA_MARGIN`), with
+        ``x_ea``/``x_cg`` overriding the stations' own; ``(None, None)`` when every station is
+        physical. Below the bound the section's inertia about its own CG would be negative: no
+        real mass distribution has it, and the mass matrix is not positive definite."""
+        for i in range(len(self.r_m)):
+            ea = self.x_ea[i] if x_ea is None else x_ea
+            cg = self.x_cg[i] if x_cg is None else x_cg
+            need = self.mass_kg_m[i] * ((cg - ea) * self.chord_m[i]) ** 2 * (1.0 + INERTIA_MARGIN)
+            if self.torsional_inertia_kg_m[i] < need:
+                return i, need
+        return None, None
 
     def array(self, name: str) -> np.ndarray:
         return np.asarray(getattr(self, name), dtype=float)
@@ -147,10 +186,28 @@ class Rotor:
     sources: tuple = field(default=(), compare=False, hash=False)
 
     def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name.strip() or len(self.name) > 200:
+            _fail("name", self.name, "must be a non-empty text of at most 200 characters")
+        if not isinstance(self.stations, BladeStations):
+            _fail("stations", self.stations, "must be BladeStations")
         R = _check_number("radius_m", self.radius_m, 0.0, 50.0, lo_open=True)
         r0 = _check_number("root_cutout_m", self.root_cutout_m, 0.0, 0.8 * R, hi_open=True)
-        if self.n_blades != 2:
-            _fail("n_blades", self.n_blades, "must be 2 (AMRA models a two-bladed teetering rotor)")
+        if isinstance(self.n_blades, bool) or not isinstance(self.n_blades, (int, np.integer)) or self.n_blades != 2:
+            _fail("n_blades", self.n_blades, "must be the integer 2 (AMRA models a two-bladed teetering rotor)")
+        from .airfoil import AIRFOIL_FILES  # lazily: the table list only
+        if not isinstance(self.airfoil, str) or self.airfoil not in AIRFOIL_FILES:
+            _fail("airfoil", self.airfoil, f"choose one of {', '.join(sorted(AIRFOIL_FILES))}")
+        for i, c in enumerate(self.stations.chord_m):
+            if not c <= MAX_CHORD_FRACTION * R:
+                _fail(f"stations.chord_m[{i}]", c, f"must be at most {MAX_CHORD_FRACTION:g} x radius_m = "
+                      f"{MAX_CHORD_FRACTION * R:g} m (a slender blade: the strip theory of the model needs R/c >= "
+                      f"{1 / MAX_CHORD_FRACTION:g})")
+        if not isinstance(self.sources, tuple) or not all(
+                isinstance(x, tuple) and len(x) == 2 and isinstance(x[0], str) and isinstance(x[1], str)
+                for x in self.sources):
+            _fail("sources", self.sources, "must be a table of field = \"where the value comes from\" texts")
+        if self.point_mass is not None and not isinstance(self.point_mass, PointMass):
+            _fail("point_mass", self.point_mass, "must be a PointMass (r_m, mass_kg, x_chord)")
         _check_number("incidence_rad", self.incidence_rad, -math.radians(20), math.radians(20))
         _check_number("vehicle_mass_kg", self.vehicle_mass_kg, 0.0, 1e5, lo_open=True)
         _check_number("hub_teeter_inertia_kg_m2", self.hub_teeter_inertia_kg_m2, 0.0, None)
@@ -187,7 +244,19 @@ class Rotor:
             changes["x_cg"] = (_check_number("cg (x_cg)", x_cg, 0.0, 1.0),) * n
         if not changes:
             return self
-        return replace(self, stations=replace(self.stations, **changes))
+        if x_ea is not None or x_cg is not None:  # the EA/CG combination must be a physical section
+            ea, cg = (None if x_ea is None else float(x_ea)), (None if x_cg is None else float(x_cg))
+            i, need = self.stations.inertia_violation(x_ea=ea, x_cg=cg)
+            if i is not None:
+                raise RotorError(inertia_message(self.stations, i, need, x_ea=ea, x_cg=cg))
+        # fast path (map keys build thousands of these): the unchanged fields were validated when
+        # this rotor was built and the changed ones just now, so copy instead of re-validating all
+        stations = copy.copy(self.stations)
+        for k, v in changes.items():
+            object.__setattr__(stations, k, v)
+        out = copy.copy(self)
+        object.__setattr__(out, "stations", stations)
+        return out
 
     def to_dict(self) -> dict:
         """The resolved rotor as the solver uses it (SI, chord fractions, root to tip)."""

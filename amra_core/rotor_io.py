@@ -8,7 +8,10 @@ Every problem raises :class:`RotorError` naming the field, the value and what is
 """
 from __future__ import annotations
 
+import errno
 import math
+import os
+import stat
 import tomllib
 from pathlib import Path
 
@@ -28,29 +31,139 @@ _TOP_OPTIONAL = {
 _DEG_ALIASES = {"twist_deg": "twist_rad"}
 
 
+#: rotor files larger than this are refused before they are parsed [bytes]
+MAX_FILE_BYTES = 1 << 20
+#: deepest bracket nesting and longest dotted key accepted (the presets use 1 and 1)
+MAX_NESTING = 32
+MAX_KEY_PARTS = 32
+
+
 def preset_names() -> list[str]:
     return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
 
 
 def load_preset(name: str) -> Rotor:
-    """A shipped preset by name (``mccutcheon``, ``paper-boundary``)."""
-    path = PRESET_DIR / f"{name}.toml"
-    if not path.is_file():
-        raise RotorError(f"preset = {name!r} is not allowed: choose one of {', '.join(preset_names())}")
-    return load_rotor_file(path)
+    """A shipped preset by name (``mccutcheon``, ``paper-boundary``): exactly one of
+    :func:`preset_names`, never a path."""
+    names = preset_names()
+    if not isinstance(name, str) or name not in names:
+        shown = name if not isinstance(name, str) or len(name) <= 60 else name[:57] + "..."
+        raise RotorError(f"preset = {shown!r} is not allowed: choose one of {', '.join(names)}")
+    return load_rotor_file(PRESET_DIR / f"{name}.toml")
+
+
+def read_rotor_text(path) -> str:
+    """The text of the rotor file ``path``: a regular file (never a FIFO or a device, which could
+    hang or never end), at most :data:`MAX_FILE_BYTES`, UTF-8; :class:`RotorError` otherwise."""
+    p = str(path)
+    if not p or "\x00" in p:
+        raise RotorError(f"rotor file {p!r} cannot be read: not a usable file name")
+    try:
+        fd = os.open(p, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
+    except OSError as exc:
+        why = "a symbolic link loop" if exc.errno == errno.ELOOP else (exc.strerror or str(exc))
+        raise RotorError(f"rotor file {p!r} cannot be read: {why}") from None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode):
+            kind = {stat.S_IFDIR: "a directory", stat.S_IFIFO: "a FIFO (named pipe)", stat.S_IFCHR: "a device",
+                    stat.S_IFBLK: "a device", stat.S_IFSOCK: "a socket"}.get(stat.S_IFMT(st.st_mode), "not a file")
+            raise RotorError(f"rotor file {p!r} cannot be read: it is {kind}, not a regular file")
+        if st.st_size > MAX_FILE_BYTES:
+            raise RotorError(f"rotor file {p!r} is too large: {st.st_size} bytes, at most {MAX_FILE_BYTES} "
+                             f"bytes (1 MiB) allowed")
+        chunks, total = [], 0
+        while True:
+            try:
+                b = os.read(fd, 65536)
+            except OSError as exc:
+                raise RotorError(f"rotor file {p!r} cannot be read: {exc.strerror or exc}") from None
+            if not b:
+                break
+            total += len(b)
+            if total > MAX_FILE_BYTES:  # grew while we read it
+                raise RotorError(f"rotor file {p!r} is too large: more than {MAX_FILE_BYTES} bytes (1 MiB)")
+            chunks.append(b)
+    finally:
+        os.close(fd)
+    data = b"".join(chunks)
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = data[:exc.start].count(b"\n") + 1
+        raise RotorError(f"rotor file {p!r} is not UTF-8 text: byte {data[exc.start]:#04x} at offset {exc.start} "
+                         f"(line {line}); is it a binary file?") from None
+
+
+def prescan_toml(text: str) -> None:
+    """Reject, before parsing, what would make the TOML parser recurse too deep or grow without
+    bound: brackets nested deeper than :data:`MAX_NESTING`, dotted keys of more than
+    :data:`MAX_KEY_PARTS` parts (a 20 000-part key in 40 kB costs the parser gigabytes)."""
+    depth = max_depth = 0
+    dots = 0  # dots in the current run of key/number characters
+    i, n, line = 0, len(text), 1
+    while i < n:
+        ch = text[i]
+        if ch in "\"'":
+            q3 = text.startswith(ch * 3, i)
+            end_tok = ch * 3 if q3 else ch
+            j = i + len(end_tok)
+            while j < n:
+                c = text[j]
+                if c == "\\" and ch == '"':
+                    j += 2
+                    continue
+                if text.startswith(end_tok, j):
+                    break
+                if c == "\n":
+                    if not q3:
+                        break
+                    line += 1
+                j += 1
+            i = j + len(end_tok)
+            continue  # a quoted key part continues the run
+        if ch == "#":
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+            dots = 0
+            continue
+        if ch in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                raise RotorError(f"TOML nested deeper than {MAX_NESTING} levels (line {line}) is not allowed: "
+                                 f"a rotor file needs at most one level")
+            max_depth = max(max_depth, depth)
+            dots = 0
+        elif ch in "]}":
+            depth = max(0, depth - 1)
+            dots = 0
+        elif ch == ".":
+            dots += 1
+            if dots >= MAX_KEY_PARTS:
+                raise RotorError(f"a dotted key of more than {MAX_KEY_PARTS} parts (line {line}) is not allowed")
+        elif ch.isalnum() or ch in "_- \t":
+            pass
+        else:
+            if ch == "\n":
+                line += 1
+            dots = 0
+        i += 1
 
 
 def load_rotor_file(path) -> Rotor:
     """A rotor from a TOML file; clear :class:`RotorError` for every kind of bad input."""
     path = Path(path)
+    text = read_rotor_text(path)
     try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise RotorError(f"rotor file {str(path)!r} cannot be read: {exc.strerror}") from None
+        prescan_toml(text)
+    except RotorError as exc:
+        raise RotorError(f"rotor file {str(path)!r}: {exc}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RotorError(f"rotor file {str(path)!r} is not valid TOML: {exc}") from None
+    except (RecursionError, MemoryError):
+        raise RotorError(f"rotor file {str(path)!r} is too deeply nested or too large to parse") from None
     try:
         return rotor_from_dict(data)
     except RotorError as exc:
@@ -62,8 +175,14 @@ def rotor_from_dict(data: dict) -> Rotor:
     blade = data.pop("blade", None)
     if not isinstance(blade, dict):
         raise RotorError("blade = (missing) is not allowed: a [blade] table of station arrays is required")
-    sources = data.pop("sources", {}) or {}
+    sources = data.pop("sources", {})
+    if not isinstance(sources, dict) or not all(isinstance(v, str) for v in sources.values()):
+        raise RotorError(f"sources = {_short(sources)} is not allowed: must be a [sources] table of "
+                         f"field = \"where the value comes from\" texts")
     point = data.pop("point_mass", None)
+    if point is not None and not isinstance(point, dict):
+        raise RotorError(f"point_mass = {_short(point)} is not allowed: must be a [point_mass] table "
+                         f"(r_m, mass_kg, x_chord)")
     top = {}
     for key in _TOP_REQUIRED:
         if key not in data:
@@ -71,6 +190,8 @@ def rotor_from_dict(data: dict) -> Rotor:
         top[key] = data.pop(key)
     for key, default in _TOP_OPTIONAL.items():
         top[key] = data.pop(key, default)
+    if not isinstance(top["name"], str):
+        raise RotorError(f"name = {_short(top['name'])} is not allowed: must be a text in quotes")
     if "incidence_deg" in data and "incidence_rad" in data:
         raise RotorError("incidence_deg and incidence_rad are both given: give one")
     if "incidence_deg" in data:
@@ -86,6 +207,8 @@ def rotor_from_dict(data: dict) -> Rotor:
 
     blade = dict(blade)
     for deg_key, rad_key in _DEG_ALIASES.items():
+        if deg_key in blade and rad_key in blade:
+            raise RotorError(f"blade.{deg_key} and blade.{rad_key} are both given: give one")
         if deg_key in blade:
             v = blade.pop(deg_key)
             blade[rad_key] = [math.radians(x) if _is_num(x) else x for x in v] if isinstance(v, list) else (
@@ -113,6 +236,11 @@ def rotor_from_dict(data: dict) -> Rotor:
         except TypeError as exc:
             raise RotorError(f"point_mass = {point!r} is not allowed: needs r_m, mass_kg and optional x_chord ({exc})") from None
     return Rotor(stations=stations, point_mass=pm, sources=tuple(sorted(sources.items())), **top)
+
+
+def _short(v) -> str:
+    t = repr(v)
+    return t if len(t) <= 80 else t[:77] + "..."
 
 
 def _is_num(x) -> bool:

@@ -21,7 +21,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import root
 
-from . import kernels
+from . import kernel_guard, kernels
 from .model import (L_FHORIZ, L_FVERT, L_THRUST, L_TORQUE, N_Y_FIXED, CompiledModel, Y_OMEGA,
                     Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step, transfer_state)
 
@@ -53,6 +53,22 @@ class TrimResult:
         return self.status == "trimmed"
 
     @property
+    def branch(self) -> str:
+        """``normal`` (autorotation: descent within the turbulent-wake region), ``windmill-brake``
+        (an equilibrium with V_c/v_h < -2: descent faster than twice the hover induced velocity,
+        not autorotation) or ``none`` (no equilibrium)."""
+        if not self.ok or self.model is None or not math.isfinite(self.descent_rate_m_s):
+            return "none"
+        return branch_of(self.model, self.descent_rate_m_s)
+
+    @property
+    def descent_ratio(self) -> float:
+        """Descent rate / hover induced velocity v_h [-] (-V_c/v_h)."""
+        if self.model is None:
+            return float("nan")
+        return self.descent_rate_m_s / _hover_induced(self.model)
+
+    @property
     def mu(self) -> float:
         if not self.ok:
             return float("nan")
@@ -63,6 +79,8 @@ class TrimResult:
                                              "airspeed_m_s", "inflow_m_s", "thrust_n", "torque_nm",
                                              "teeter_amplitude_rad", "tip_twist_rad")}
         out["mu"] = self.mu
+        out["branch"] = self.branch
+        out["descent_ratio"] = self.descent_ratio if self.ok else float("nan")
         out = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in out.items()}
         if self.reason:
             out["reason"] = self.reason
@@ -74,6 +92,17 @@ class TrimResult:
 def _hover_induced(model: CompiledModel) -> float:
     r = model.rotor
     return math.sqrt(r.vehicle_mass_kg * model.flight.gravity_m_s2 / (2 * model.flight.density_kg_m3 * r.disc_area_m2))
+
+
+#: an equilibrium descending faster than this many hover induced velocities (V_c/v_h < -2, beyond the
+#: turbulent-wake region of the empirical inflow curve) is on the windmill-brake side, not autorotation
+#: (the same limit as :data:`amra_core.verdict.WINDMILL_BRAKE_RATIO` for simulated runs)
+WINDMILL_BRAKE_RATIO = 2.0
+
+
+def branch_of(model: CompiledModel, descent_rate_m_s: float) -> str:
+    """``windmill-brake`` if ``descent_rate_m_s`` [m/s] exceeds ``WINDMILL_BRAKE_RATIO`` v_h, else ``normal``."""
+    return "windmill-brake" if descent_rate_m_s > WINDMILL_BRAKE_RATIO * _hover_induced(model) else "normal"
 
 
 def _steady_inflow_guess(x: float) -> float:
@@ -96,18 +125,21 @@ def trim_axial(model: CompiledModel, guess: Optional[np.ndarray] = None, omega_h
             return res
     vh = _hover_induced(model)
     res = None
-    for ratio in (1.91, 1.85, 1.97, 2.3, 2.8, 3.5):
-        y0 = np.zeros(model.n_y) if guess is None else guess.copy()
-        y0[Y_OMEGA] = omega_hold or (omega_guess(model) if guess is None else guess[Y_OMEGA])
-        y0[Y_VD] = ratio * vh
-        y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
-        res = _trim_axial_from(model, y0, omega_hold)
-        if res.ok:
-            return res
+    for fallback in (False, True):  # the jitted Newton from every start first; scipy's hybr only if none converges
+        for ratio in (1.91, 1.85, 1.97, 2.3, 2.8, 3.5):
+            y0 = np.zeros(model.n_y) if guess is None else guess.copy()
+            y0[Y_OMEGA] = omega_hold or (omega_guess(model) if guess is None else guess[Y_OMEGA])
+            y0[Y_VD] = ratio * vh
+            y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
+            res = _trim_axial_from(model, y0, omega_hold, fallback)
+            if res.ok:
+                return res
     return res
 
 
-def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[float]) -> TrimResult:
+def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[float],
+                     fallback: bool = True) -> TrimResult:
+    """The axial trim from ``y0``: the jitted Newton, then (``fallback``) scipy's hybr if it fails."""
     m = model.with_controls(alpha_s_rad=0.0, airspeed_m_s=0.0, quasi_static=True,
                             hold_omega=omega_hold is not None, hold_vd=False)
     a = m.arrays
@@ -133,29 +165,53 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
 
     def resid(z):
         y = unpack(z)
-        kernels.evaluate(y, a, dy, loads)
+        kernel_guard.evaluate(y, a, dy, loads)
         out = [dy[Y_OMEGA]] if free_omega else []
         out += [dy[Y_VD], dy[Y_V0], dy[6], dy[7]]
         return np.concatenate([out, dy[m.xd_slice()]])
 
     z0 = np.concatenate([[y0[Y_OMEGA]] if free_omega else [], [y0[Y_VD], y0[Y_V0]], y0[4:6], y0[xs]])
-    sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
-    y = unpack(sol.x)
-    res = np.abs(resid(sol.x))
+    y = _newton_axial(m, y0, free_omega)  # jitted Newton first; scipy's hybr where it does not converge
+    if y is not None:
+        ok = True
+    elif not fallback:
+        return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
+                          model=model)
+    else:
+        sol = root(resid, z0, method="hybr", options={"xtol": 1e-11, "maxfev": 200 * (len(z0) + 1)})
+        y = unpack(sol.x)
+        res = np.abs(resid(sol.x))
+        ok = sol.success or res.max() < 1e-6
     omega = y[Y_OMEGA]
-    ok = sol.success or res.max() < 1e-6
     # momentum theory's second windmill root (far wake flowing down) is unphysical and unstable
     windmill_unphysical = (-y[Y_VD] / vh < -2.0 - 0.1) and (-y[Y_VD] + 2 * y[Y_V0] > 0)
     if not ok or not (0.2 * omega_guess(m) < omega < 4 * omega_guess(m)) or windmill_unphysical \
             or _inflow_unstable(m, y):
         return TrimResult("no-autorotation", reason="no torque/thrust equilibrium found on the physical branch",
                           model=model)
-    kernels.evaluate(y, a, dy, loads)
+    kernel_guard.evaluate(y, a, dy, loads)
     y_full = y.copy()
-    kernels.steady_wagner_states(y_full, model.arrays)
+    kernel_guard.steady_wagner_states(y_full, model.arrays)
     tw = _tip_twist(model, y_full)
     return TrimResult("trimmed", y_full, omega, y[Y_VD], 0.0, 0.0, y[Y_V0], loads[L_THRUST], loads[L_TORQUE],
                       0.0, tw, model=model)
+
+
+def _newton_axial(m: CompiledModel, y0: np.ndarray, free_omega: bool) -> Optional[np.ndarray]:
+    """The axial trim by the jitted Newton of :mod:`amra_core.trim_kernels` from ``y0``, or None."""
+    from . import trim_kernels
+    xs, xds = m.x_slice(), m.xd_slice()
+    lead = [Y_OMEGA] if free_omega else []
+    iu = np.array(lead + [Y_VD, Y_V0, 4, 5] + list(range(xs.start, xs.stop)), dtype=np.int64)
+    ir = np.array(lead + [Y_VD, Y_V0, 6, 7] + list(range(xds.start, xds.stop)), dtype=np.int64)
+    y = np.ascontiguousarray(y0, dtype=np.float64).copy()
+    kernel_guard.check_state(y, m.arrays)  # shapes checked once here: the Newton kernel does not check
+    if len(iu) != len(ir) or max(iu.max(), ir.max()) >= len(y) or min(iu.min(), ir.min()) < 0:
+        raise kernel_guard.KernelShapeError(f"Newton unknown/residual indices do not fit a state of length {len(y)}")
+    it, rn = trim_kernels.newton_axial(y, m.arrays, iu, ir, 1e-8, 40)
+    if it < 0 or not np.all(np.isfinite(y)):
+        return None
+    return y
 
 
 def _inflow_unstable(m: CompiledModel, y: np.ndarray) -> bool:
@@ -165,9 +221,9 @@ def _inflow_unstable(m: CompiledModel, y: np.ndarray) -> bool:
     h = 1e-4 * max(abs(y[Y_V0]), 1.0)
     dy = np.zeros(m.n_y); loads = np.zeros(8)
     yp = y.copy(); yp[Y_V0] += h
-    kernels.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
+    kernel_guard.evaluate(yp, m.arrays, dy, loads); up = dy[Y_V0]
     yp[Y_V0] -= 2 * h
-    kernels.evaluate(yp, m.arrays, dy, loads)
+    kernel_guard.evaluate(yp, m.arrays, dy, loads)
     return (up - dy[Y_V0]) / (2 * h) > 0.0
 
 
@@ -192,8 +248,8 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
     hist = np.zeros((steps_rev, kernels.N_HIST)); states = np.zeros((steps_rev, len(y)))
     if n_revs > 1:
         dummy_h = np.zeros((1, kernels.N_HIST)); dummy_s = np.zeros((1, len(y)))
-        kernels.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
-    done, rows, status = kernels.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
+        kernel_guard.advance(y, 0.0, dt_rev, n - steps_rev, 10**9, model.arrays, dummy_h, dummy_s, -1.0)
+    done, rows, status = kernel_guard.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
     if status != 0:
         raise FloatingPointError("non-finite state while converging the periodic solution")
     from .model import L_FVERT as _  # noqa: F401  (layout documented in model)
@@ -280,6 +336,15 @@ def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimRe
         if res.ok and hold is not None:
             res.model = model.with_controls(hold_omega=True)
         return res
+    if guess is None and hold is None:
+        return trim_forward_continued(model)  # a cold start only at low speed, then step up
+    return _solve_forward_at(model, hold, guess)
+
+
+def _solve_forward_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:
+    """Forward-flight trim at the model's airspeed or advance ratio from ``guess`` (cold start from
+    the axial trim when None: converges only at low speed, see :func:`trim_forward_continued`)."""
+    fl = model.flight
     if fl.mu is None:
         return trim_forward(model, fl.airspeed_m_s, hold, guess)
     # advance ratio given: fixed point on the airspeed V = mu Omega R / cos(tilt)
@@ -298,17 +363,153 @@ def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimRe
     return res
 
 
+#: forward trims are cold-started (from the axial trim, shaft tilt 8 deg, half the axial descent
+#: rate) only up to this advance ratio; faster conditions are reached by continuation from there
+FORWARD_COLD_START_MU = (0.15, 0.1, 0.05)
+FORWARD_STEP_MU = 0.05  #: first continuation step in advance ratio (halved on a failed step)
+FORWARD_MIN_STEP_MU = 0.004
+
+
+def trim_forward_continued(model: CompiledModel) -> TrimResult:
+    """Forward-flight trim (free rotor speed) by continuation in flight speed from a slow condition.
+
+    Why: the cold start of :func:`trim_forward` guesses shaft tilt +8 deg and half the axial descent
+    rate; the trims of the McCutcheon rotor have a forward-tilted shaft (-2.4 deg at mu 0.2, -3.4
+    deg at mu 0.3, -5.2 deg at mu 0.5) and a descent rate of 4-7 m/s. From mu 0.25 up the Newton
+    iteration on 3-revolution averages (whose blade motion has not settled from the bad guess) then
+    wanders with clipped steps and ends unconverged (mu 0.25) or in a non-finite march (mu 0.3), although a
+    trim exists all the way to mu 0.5. So the trim is cold-started at mu <= 0.15 and followed up in
+    advance ratio (or in airspeed, when the airspeed is given) with each trim the guess of the next,
+    halving the step on a failure. When the branch cannot be followed to the requested speed, the
+    result is ``no-autorotation`` with the last trimmed point's state and model and ``branch_end``
+    (``kind: forward-speed``, its advance ratio, airspeed, rotor speed, descent rate, shaft tilt), from
+    which a simulation can start."""
+    from dataclasses import replace as _replace
+    fl = model.flight
+    by_mu = fl.mu is not None
+    target = float(fl.mu) if by_mu else float(fl.airspeed_m_s)
+    omega0 = omega_guess(model)
+    scale = 1.0 if by_mu else omega0 * model.rotor.radius_m  # speed per unit advance ratio [m/s]
+
+    def model_at(s: float) -> CompiledModel:
+        if abs(s - target) < 1e-12:
+            return model
+        f = _replace(fl, mu=s) if by_mu else _replace(fl, airspeed_m_s=s)
+        return _replace(model, flight=f)
+
+    def solve(s, guess) -> Optional[TrimResult]:
+        try:
+            res = _solve_forward_at(model_at(s), None, guess)
+        except FloatingPointError as exc:
+            res = TrimResult("no-autorotation", reason=str(exc), model=model_at(s))
+        return res if res.ok and _plausible(res, guess) else None
+
+    prev, s_prev = None, None
+    for s0 in sorted({min(target, mu0 * scale) for mu0 in FORWARD_COLD_START_MU}, reverse=True):
+        prev = solve(s0, None)
+        if prev is not None:
+            s_prev = s0
+            break
+    if prev is None:
+        return TrimResult("no-autorotation", model=model,
+                          reason=f"no forward-flight trim even at mu <= {FORWARD_COLD_START_MU[0]:g} "
+                                 f"(cold starts from the axial trim did not converge)")
+    step = FORWARD_STEP_MU * scale
+    while s_prev < target - 1e-12:
+        s = min(target, s_prev + step)
+        res = solve(s, prev)
+        if res is not None and res.ok:
+            prev, s_prev = res, s
+            step = min(FORWARD_STEP_MU * scale, 1.5 * step)
+            continue
+        step *= 0.5
+        if step < FORWARD_MIN_STEP_MU * scale:
+            break
+    if s_prev >= target - 1e-12 and prev.model.flight == model.flight:
+        return prev
+    out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
+    what = f"mu {s_prev:.3g}" if by_mu else f"airspeed {s_prev:.3g} m/s"
+    out.reason = (f"no steady autorotation: the forward-flight trim branch, followed up in "
+                  f"{'advance ratio' if by_mu else 'airspeed'} from a slow trim, ends at {what} "
+                  f"(no trim for a step of {step / scale:.2g} in mu beyond it)")
+    out.branch_end = {"kind": "forward-speed", "mu": float(prev.mu), "airspeed_m_s": float(prev.airspeed_m_s),
+                      "omega_rad_s": float(prev.omega_rad_s), "descent_rate_m_s": float(prev.descent_rate_m_s),
+                      "disk_tilt_rad": float(prev.disk_tilt_rad), "tip_twist_rad": float(prev.tip_twist_rad),
+                      "gj_mean_nm2": gj_mean_of(prev.model),
+                      "requested_mu": float(fl.mu) if by_mu else None,
+                      "requested_airspeed_m_s": None if by_mu else float(fl.airspeed_m_s)}
+    out.start = prev
+    return out
+
+
 def _faster_branch(model: CompiledModel, hold, prev: TrimResult) -> Optional[TrimResult]:
-    """A trim of ``model`` faster than the fold point ``prev`` (axial flight), or None."""
+    """A normal-branch trim of ``model`` faster than the fold point ``prev`` (axial flight), or None."""
     if not model.flight.is_axial or hold is not None:
         return None
     y = transfer_state(prev.state, prev.model, model)
     for factor in (1.1, 1.25, 1.4):
         g = y.copy(); g[Y_OMEGA] *= factor
-        res = trim_axial(model, guess=g)
-        if _plausible(res, None) and res.omega_rad_s > prev.omega_rad_s * 1.02:
+        res = _trim_axial_from(model, g, None)
+        if _plausible(res, None) and res.branch == "normal" and res.omega_rad_s > prev.omega_rad_s * 1.02:
             return res
     return None
+
+
+# --------------------------------------------------------------------------- branch continuation
+#: largest change, beyond the secant prediction, that a continuation step may show: rotor speed
+#: [fraction], descent rate and inflow [fraction of v_h], tip twist [rad]
+STEP_OMEGA_REL = 0.05
+STEP_SPEED_VH = 0.15
+STEP_TWIST_RAD = 0.02
+
+
+def _trim_scalars(res: TrimResult) -> np.ndarray:
+    return np.array([res.omega_rad_s, res.descent_rate_m_s, res.inflow_m_s, res.tip_twist_rad])
+
+
+def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: CompiledModel) -> np.ndarray:
+    """Secant predictor of the state on ``target``: ``prev + s (prev - prev2)`` (``s``: the new step
+    over the last one, in log GJ), both mapped onto ``target``'s layout; ``prev`` alone without ``prev2``."""
+    y1 = transfer_state(prev.state, prev.model, target)
+    if prev2 is None or s == 0.0:
+        return y1
+    y0 = transfer_state(prev2.state, prev2.model, target)
+    y = y1 + s * (y1 - y0)
+    y[Y_PSI] = y1[Y_PSI]
+    return y
+
+
+def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
+    """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
+    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
+    the secant prediction. A False here means: halve the step (or a fold). The branch may move
+    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
+    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
+    if not _plausible(res, None):
+        return False
+    vh = _hover_induced(res.model)
+    x1 = _trim_scalars(prev)
+    pred = x1 if prev2 is None else x1 + s * (x1 - _trim_scalars(prev2))
+    d = np.abs(_trim_scalars(res) - pred)
+    return bool(d[0] <= STEP_OMEGA_REL * prev.omega_rad_s and d[1] <= STEP_SPEED_VH * vh
+                and d[2] <= STEP_SPEED_VH * vh and d[3] <= STEP_TWIST_RAD)
+
+
+def continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[TrimResult] = None,
+                s: float = 1.0) -> TrimResult:
+    """One continuation step: the trim of ``model`` from the predictor through ``prev``/``prev2``
+    (never a cold start). The caller checks :func:`on_branch`."""
+    try:
+        if model.flight.is_axial:
+            res = _trim_axial_from(model, predict(prev, prev2, s, model), hold)
+            if not res.ok and prev2 is not None:
+                res = _trim_axial_from(model, predict(prev, None, 0.0, model), hold)
+            if res.ok and hold is not None:
+                res.model = model.with_controls(hold_omega=True)
+            return res
+        return _solve_at(model, hold, prev)
+    except FloatingPointError as exc:
+        return TrimResult("no-autorotation", reason=str(exc), model=model)
 
 
 def gj_mean_of(model: CompiledModel) -> float:
@@ -365,71 +566,105 @@ def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y
 
 
 def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int = 8,
-         stiff_factor: float = 30.0) -> TrimResult:
+         stiff_factor: float = 30.0, rel_tol: float = 0.02) -> TrimResult:
     """Trim for the model's flight condition, following the trim branch by continuation in GJ
     from a ``stiff_factor`` times stiffer blade down to the model's GJ (so the solution is the
-    physical branch, not a spurious root). If the branch ends first (a fold: the torque balance
-    has no solution), the result is ``no-autorotation`` with ``branch_end`` (GJ scale, mean GJ,
-    rotor speed, descent rate and tip twist of the last trimmed point) and that point's state
-    and model in ``state``/``model``, from which a simulation can start (model-notes §7)."""
+    physical branch, not a spurious root). Steps start at ``n_steps`` per the whole range in log GJ;
+    a step whose result leaves the branch (:func:`on_branch`: a jump in rotor speed, descent rate,
+    inflow or twist, or another branch class) is halved, never restarted from scratch. If the step
+    falls below ``rel_tol`` the branch has ended (a fold: the torque balance has no solution): the
+    result is ``no-autorotation`` with ``branch_end`` (GJ scale, mean GJ, rotor speed, descent rate
+    and tip twist of the last trimmed point, and a windmill-brake equilibrium at the requested GJ
+    if one exists) and that point's state and model in ``state``/``model``, from which a simulation
+    can start (model-notes §7)."""
     hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
     if hold is not None and not model.flight.is_axial:
         return _solve_at(model, hold, None)  # rotor speed held (Table 1): no autorotation branch to follow
-    prev = None
-    first = None
-    last_f = None
-    for f in list(np.geomspace(stiff_factor, 1.0, n_steps)):
-        m_f = model if f == 1.0 else _with_gj_scale(model, f)
-        try:
-            res = _solve_at(m_f, hold, prev)
-        except FloatingPointError as exc:
-            res = TrimResult("no-autorotation", reason=str(exc), model=m_f)
-        if res.status == "thrust-limited":  # rotor speed held: the stiffness continuation does not apply
-            return res if f == 1.0 else _solve_at(model, hold, None)
-        if not _plausible(res, prev):
-            if prev is None:
-                res.status = "no-autorotation"
-                res.reason = res.reason or "no steady autorotation even for a 30x stiffer blade"
-                return res
-            # bisect the factor between the last good point and this one to locate the fold
-            lo, hi = last_f, f
-            for _ in range(4):
-                mid = math.sqrt(lo * hi)
-                try:
-                    r_mid = _solve_at(_with_gj_scale(model, mid), hold, prev)
-                except FloatingPointError:
-                    r_mid = TrimResult("no-autorotation")
-                if _plausible(r_mid, prev):
-                    prev, lo = r_mid, mid
-                else:
-                    hi = mid
-            gj_mean = float(np.mean(model.rotor.stations.gj_nm2))
-            out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
-            # which way the rotor speed was heading along the branch tells the two folds apart
-            runaway = "overspeed" if prev.omega_rad_s > first.omega_rad_s else "collapse"
-            if runaway == "overspeed":
-                # the branch may fold back onto a faster one (an S-curve): a trim there is the
-                # state the rotor jumps to; only without one does it run away
-                jump = _faster_branch(model, hold, prev)
-                if jump is not None:
-                    jump.reason = (f"the trim branch through the stiff blade folds at mean GJ "
-                                   f"{gj_mean_of(model) * lo:.0f} N m^2/rad; this trim is on the faster branch")
-                    return jump
-            if runaway == "collapse":
-                out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
-                              "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
-            else:
-                out.reason = ("no steady autorotation: following the trim branch down in GJ, the elastic nose-down "
-                              "twist lowers the blade pitch as the rotor speeds up, until no rotor speed balances "
-                              "the torque (the rotor runs away upwards)")
-            out.branch_end = {"gj_scale": float(lo), "gj_mean_nm2": gj_mean * float(lo),
-                              "omega_rad_s": float(prev.omega_rad_s),
-                              "descent_rate_m_s": float(prev.descent_rate_m_s),
-                              "disk_tilt_rad": float(prev.disk_tilt_rad),
-                              "tip_twist_rad": float(prev.tip_twist_rad),
-                              "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway}
-            out.start = prev
-            return out
-        prev, last_f = res, f
-        first = first or res
+    m_stiff = _with_gj_scale(model, stiff_factor)
+    try:
+        first = _solve_at(m_stiff, hold, None)
+    except FloatingPointError as exc:
+        first = TrimResult("no-autorotation", reason=str(exc), model=m_stiff)
+    if first.status == "thrust-limited":
+        return _solve_at(model, hold, None)
+    if not _plausible(first, None) or first.branch != "normal":
+        first.status = "no-autorotation"
+        first.reason = first.reason or f"no steady autorotation even for a {stiff_factor:g}x stiffer blade"
+        return first
+    ln_f, h_max = math.log(stiff_factor), math.log(stiff_factor) / max(n_steps - 1, 1)
+    h_min = math.log1p(rel_tol)
+    prev, prev2, h_prev = first, None, h_max
+    ln_cur, h = ln_f, h_max
+    while ln_cur > 0.0:
+        h = min(h, ln_cur)
+        ln_new = ln_cur - h
+        m_f = model if ln_new <= 0.0 else _with_gj_scale(model, math.exp(ln_new))
+        res = continue_to(m_f, hold, prev, prev2, h / h_prev)
+        if res.status == "thrust-limited":
+            return res if ln_new <= 0.0 else _solve_at(model, hold, None)
+        if on_branch(res, prev, prev2, h / h_prev):
+            prev2, prev, h_prev, ln_cur = prev, res, h, ln_new
+            h = min(h * 1.5, h_max)
+            continue
+        if h > h_min * (1 + 1e-9) and ln_cur > 0.0:
+            h = max(h / 2, h_min)
+            continue
+        return _branch_end(model, hold, first, prev, math.exp(ln_cur))
     return prev
+
+
+def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult, lo: float) -> TrimResult:
+    """The result for a trim branch that ends (folds) at GJ scale ``lo`` above the model's GJ."""
+    gj_mean = gj_mean_of(model)
+    out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
+    # which way the rotor speed was heading along the branch tells the two folds apart
+    runaway = "overspeed" if prev.omega_rad_s > first.omega_rad_s else "collapse"
+    if runaway == "overspeed":
+        # the branch may fold back onto a faster one (an S-curve): a trim there is the
+        # state the rotor jumps to; only without one does it run away
+        jump = _faster_branch(model, hold, prev)
+        if jump is not None:
+            jump.reason = (f"the trim branch through the stiff blade folds at mean GJ "
+                           f"{gj_mean * lo:.0f} N m^2/rad; this trim is on the faster branch")
+            return jump
+    if runaway == "collapse":
+        out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
+                      "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
+    else:
+        out.reason = ("no steady autorotation: following the trim branch down in GJ, the elastic nose-down "
+                      "twist lowers the blade pitch as the rotor speeds up, until no rotor speed balances "
+                      "the torque (the rotor runs away upwards)")
+    out.branch_end = {"gj_scale": float(lo), "gj_mean_nm2": gj_mean * float(lo),
+                      "omega_rad_s": float(prev.omega_rad_s),
+                      "descent_rate_m_s": float(prev.descent_rate_m_s),
+                      "disk_tilt_rad": float(prev.disk_tilt_rad),
+                      "tip_twist_rad": float(prev.tip_twist_rad),
+                      "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway}
+    wb = windmill_brake_state(model, hold)
+    if wb is not None:
+        out.branch_end["windmill_brake_descent_rate_m_s"] = float(wb.descent_rate_m_s)
+        out.reason += (f"; an equilibrium exists on the windmill-brake side (descent rate {wb.descent_rate_m_s:.1f} m/s, "
+                       f"{wb.descent_ratio:.1f} v_h), which is not autorotation")
+    out.start = prev
+    return out
+
+
+def windmill_brake_state(model: CompiledModel, hold=None) -> Optional[TrimResult]:
+    """An axial equilibrium of ``model`` on the windmill-brake side (cold starts deep in the
+    windmill state), or None (forward flight: not searched)."""
+    if not model.flight.is_axial:
+        return None
+    vh = _hover_induced(model)
+    for fallback in (False, True):
+        for ratio in (2.8, 3.5, 4.5, 6.0):
+            y0 = np.zeros(model.n_y)
+            y0[Y_OMEGA] = hold or omega_guess(model)
+            y0[Y_VD] = ratio * vh
+            y0[Y_V0] = _steady_inflow_guess(-ratio) * vh
+            try:
+                res = _trim_axial_from(model, y0, hold, fallback)
+            except FloatingPointError:
+                continue
+            if _plausible(res, None) and res.branch == "windmill-brake":
+                return res
+    return None

@@ -2,9 +2,15 @@
 
 Deviation signals (normalised teeter, tip twists and rotor speed) are taken relative to the start
 (axial flight: the trim is constant) or to the same azimuth one revolution earlier (forward flight:
-the trim is periodic, so ``s(t) - s(t - T_rev)`` removes it and keeps any growing or decaying
+the trim is periodic, so ``s(psi) - s(psi - 2 pi)`` removes it and keeps any growing or decaying
 motion). Their envelope (the maximum per window of one revolution, or 0.2 s) is fitted by least
 squares in log scale: the slope is the growth rate [1/s].
+
+Runs without a trim (started from a branch end, model-notes §7) are judged by where the rotor goes:
+into the windmill-brake state (axial flight, descent beyond 2 v_h) or still falling at the end: ``no-autorotation``;
+settled at another rotor speed: the motion after it settled is judged as a trimmed run's would be
+(the explanation says where it settled); still moving otherwise: ``undetermined`` (run longer).
+No data, or too little for the envelope fit: ``undetermined`` with the reason, never ``stable``.
 """
 from __future__ import annotations
 
@@ -14,13 +20,26 @@ from typing import Optional
 
 import numpy as np
 
-VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "numerical-failure")
-UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
+from .kernels import EMP_BLEND
+
+#: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
+#: says which and how long a run is needed); neither stable nor unstable, never counted as either
+#: ``windmill-brake``: an axial run starts and stays on the windmill-brake side (descent rate beyond
+#: the turbulent-wake region, V_c/v_h < -2): an equilibrium, but not normal autorotation (issue 8
+#: §2), so counted with the unstable verdicts; an untrimmed axial run that ends there is
+#: ``no-autorotation``
+VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake", "numerical-failure",
+            "undetermined")
+UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake")
 
 #: a perturbation growing faster than this [1/s] is unstable (|e^(0.02 * 10 s)| = 1.22 over a run)
 GROWTH_THRESHOLD_PER_S = 0.02
 #: oscillation frequencies below this [Hz] count as monotonic (divergence), not flutter
 MIN_FLUTTER_HZ = 0.3
+#: descent rate / v_h beyond which the rotor is in the windmill-brake state: the end of the
+#: turbulent-wake region of the empirical inflow curve (V_c/v_h = -2) and its blend into momentum
+#: theory, the same bound as :data:`amra_core.trim.WINDMILL_BRAKE_RATIO`
+WINDMILL_BRAKE_RATIO = 2.0 + EMP_BLEND
 
 
 @dataclass
@@ -52,12 +71,18 @@ def _deviation(h: np.ndarray, cols: dict, axial: bool, omega_ref: float, ref_row
         ref = np.array([ref_row[cols[k]] for k in SIGNALS])
         ref[3] = ref[3] / omega_ref
         d = (sig - ref) / scale
-    else:
-        t_rev = 2 * math.pi / omega_ref
+    else:  # the same azimuth one revolution earlier (not a fixed period: the rotor speed may move)
+        psi = h[:, cols["azimuth_rad"]]
         d = np.full_like(sig, np.nan)
-        late = t >= t[0] + t_rev
-        for k in range(sig.shape[1]):
-            d[late, k] = (sig[late, k] - np.interp(t[late] - t_rev, t, sig[:, k])) / scale
+        late = psi >= psi[0] + 2 * math.pi
+        if np.all(np.diff(psi) > 0):
+            for k in range(sig.shape[1]):
+                d[late, k] = (sig[late, k] - np.interp(psi[late] - 2 * math.pi, psi, sig[:, k])) / scale
+        else:  # rotor speed not positive throughout: fall back to the trim's period
+            t_rev = 2 * math.pi / omega_ref
+            late = t >= t[0] + t_rev
+            for k in range(sig.shape[1]):
+                d[late, k] = (sig[late, k] - np.interp(t[late] - t_rev, t, sig[:, k])) / scale
     return np.sqrt(np.sum(d**2, axis=1)), d
 
 
@@ -95,13 +120,61 @@ def _dominant_frequency(t, d):
     return float(f[int(np.argmax(spec))])
 
 
+def _windmill_brake(h, cols, t, window, v_h):
+    """(descent rate at the start, mean over the last window [m/s], that mean / v_h) if the run
+    ends on the windmill-brake side (descent beyond WINDMILL_BRAKE_RATIO v_h), else None."""
+    if not v_h or len(t) < 2:
+        return None
+    vd = h[:, cols["descent_rate_m_s"]]
+    vd_end = float(np.mean(vd[t >= t[-1] - window]))
+    if vd_end / v_h <= WINDMILL_BRAKE_RATIO:
+        return None
+    return float(vd[0]), vd_end, vd_end / v_h
+
+
+def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
+    """Where the rotor speed of a run that left its start ends up: ``("settled", first row index,
+    mean rotor speed)`` when the window-averaged rotor speed over the last third of the run (at
+    least 3 windows) trends by less than 1 % of its level and spans less than 4 %, the settled part
+    starting where the window means last came within 3 % of that level (at least 6 windows);
+    ``("falling", rate)`` when it is still falling faster than that [fraction of the level per s];
+    ``("moving", rate)`` otherwise (still rising, or not yet settled)."""
+    edges = np.arange(t[0], t[-1] + 1e-12, window)
+    starts, centres, means = [], [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = np.nonzero((t >= a) & (t < b))[0]
+        if len(sel):
+            starts.append(sel[0]); centres.append(0.5 * (a + b)); means.append(float(np.mean(om[sel])))
+    n_last = max(3, len(means) // 3)
+    if len(means) < 2 * n_last:
+        return ("moving", float("nan"))
+    last = np.array(means[-n_last:]); tc = np.array(centres[-n_last:])
+    level = float(last.mean())
+    if level <= 0:
+        return ("falling", float("nan"))
+    slope = float(np.polyfit(tc, last, 1)[0])
+    rate = slope / level
+    if abs(rate) * (tc[-1] - tc[0]) >= 0.01 or last.max() - last.min() >= 0.04 * level:
+        return ("falling" if rate * (tc[-1] - tc[0]) <= -0.01 else "moving", rate)
+    k = len(means) - 1
+    while k > 0 and abs(means[k - 1] - level) <= 0.03 * level:
+        k -= 1
+    if len(means) - k < 6:
+        return ("moving", rate)
+    return ("settled", int(starts[k]), level)
+
+
 def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: str,
-          trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01) -> Verdict:
-    """Classify a run. ``status`` is the Simulation's (running/numerical-failure/rotor-stopped/
-    overspeed-stop); ``trimmed`` says whether a steady autorotation existed for the parameters;
-    ``ref_row`` is the history row of the unperturbed starting state."""
+          trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01,
+          hover_induced_m_s: Optional[float] = None) -> Verdict:
+    """Classify a run. ``status`` is the Simulation's (running/finished/numerical-failure/
+    rotor-stopped/overspeed-stop); ``trimmed`` says whether a steady autorotation existed for the
+    parameters; ``ref_row`` is the history row of the unperturbed starting state;
+    ``hover_induced_m_s`` (v_h [m/s]) enables the windmill-brake checks (descent beyond 2 v_h)."""
     cols = {c: i for i, c in enumerate(columns)}
     h = history
+    if len(h) == 0:
+        return Verdict("undetermined", None, None, None, explanation="no data yet: nothing has been simulated")
     if status == "numerical-failure" or not np.isfinite(h).all():
         return Verdict("numerical-failure", None, None, None, explanation=("the time step left its stability region (non-finite state or an impossible "
                                      "jump of the rotor speed): the run was stopped; try a smaller dt_s"))
@@ -125,19 +198,57 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            "no torque equilibrium exists: the rotor speed decayed from the start")
         return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
+    # axial flight only: in forward flight the mass flow is set by the airspeed, and a descent
+    # rate of a few v_h is an ordinary glide (15 m/s at 80 m/s airspeed is an 11 deg path)
+    wb = _windmill_brake(h, cols, t, window, hover_induced_m_s) if axial else None
+    if wb is not None and not trimmed and collapse is None and status != "rotor-stopped":
+        vd0, vd_end, x_end = wb
+        return Verdict("no-autorotation", growth, freq, None, amp_end,
+                       f"normal autorotation was lost: the descent rate rose from {vd0:.1f} to {vd_end:.1f} m/s "
+                       f"= {x_end:.1f} v_h, the windmill-brake state (V_c/v_h < -{WINDMILL_BRAKE_RATIO:g}), while "
+                       f"the rotor speed went from {om[0]:.1f} to {om[-1]:.1f} rad/s")
     if not trimmed:
         drift = (om[0] - om[-1]) / omega_ref
+        state = _settle_state(t, om, window) if abs(drift) > 0.05 else ("none",)
+        if state[0] == "settled":  # autorotation at another rotor speed: judge the motion there
+            _, i0, om_s = state
+            sub = h[i0:]
+            ref = np.median(sub, axis=0)  # axial: deviations about the settled state
+            v = judge(sub, columns, om_s, axial, status, True, ref, perturbation_scale, hover_induced_m_s)
+            if v.verdict == "undetermined":
+                v.verdict = "no-autorotation"
+            v.explanation = (f"no steady autorotation on the trim branch; the rotor speed settled "
+                             f"{100 * abs(drift):.0f} % {'below' if drift > 0 else 'above'} the branch end, at "
+                             f"{om_s:.2f} rad/s from t = {t[i0]:.1f} s (descent rate "
+                             f"{np.mean(sub[:, cols['descent_rate_m_s']]):.1f} m/s): there " + v.explanation)
+            v.collapse_time_s = collapse
+            return v
         if growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill:
             return Verdict("flutter", growth, freq, collapse, amp_end, "growing coupled oscillation (no trim exists)")
+        if state[0] == "moving":
+            return Verdict("undetermined", growth, freq, collapse, amp_end,
+                           f"the rotor speed moved {100 * abs(drift):.0f} % from the branch end and had not settled "
+                           f"by t = {t[-1]:.1f} s: run longer to see where it settles")
         if drift > 0.05:
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
-                           f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end")
+                           f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end "
+                           f"and was still falling at the end of the run")
     if growth is None:
-        return Verdict("stable", None, freq, None, amp_end, "run too short to identify a growth rate")
+        window_s = max(2 * math.pi / omega_ref, 0.1)
+        need = (3 * window_s + (0.0 if axial else 2 * math.pi / omega_ref))
+        return Verdict("undetermined", None, freq, None, amp_end,
+                       f"run too short to identify a growth rate: {float(t[end - 1] - t[0]) if end else 0.0:.3g} s "
+                       f"simulated, the envelope fit needs at least 3 windows of {window_s:.3g} s "
+                       f"(about {need:.2g} s{'' if axial else ', after the first revolution'})")
     if growth > GROWTH_THRESHOLD_PER_S or (amp_end is not None and amp_end > 20.0):
         kind = "flutter" if oscill else "divergence"
         why = "growing oscillation" if oscill else "monotonic runaway"
         if growth <= GROWTH_THRESHOLD_PER_S:
             why = "saturated into a limit cycle 20x larger than the perturbation"
         return Verdict(kind, growth, freq, collapse, amp_end, why)
+    if wb is not None and -wb[0] / hover_induced_m_s < -WINDMILL_BRAKE_RATIO:
+        return Verdict("windmill-brake", growth, freq, None, amp_end,
+                       f"the perturbation decays, but about an equilibrium on the windmill-brake side: descent "
+                       f"rate {wb[1]:.1f} m/s = {wb[2]:.1f} v_h (beyond the turbulent-wake region, V_c/v_h < "
+                       f"-{WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
     return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays")

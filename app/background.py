@@ -23,7 +23,13 @@ class AnalysisPool:
         self.workers = workers
         self._ctx = mp.get_context("spawn")
         self._lock = threading.Lock()
-        self._pool = cf.ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx)
+        self._pool = self._new_pool()
+
+    def _new_pool(self):
+        # analyses at low CPU priority: the live runs and the event loop first (server_limits)
+        from .server_limits import BACKGROUND_NICE
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
+                                      initializer=_nice, initargs=(BACKGROUND_NICE,))
 
     def submit(self, fn, *args) -> cf.Future:
         with self._lock:
@@ -31,7 +37,7 @@ class AnalysisPool:
                 return self._pool.submit(fn, *args)
             except cf.process.BrokenProcessPool:  # a worker died: a fresh pool for what follows
                 self._pool.shutdown(wait=False, cancel_futures=True)
-                self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx)
+                self._pool = self._new_pool()
                 return self._pool.submit(fn, *args)
 
     def close(self) -> None:
@@ -93,3 +99,11 @@ class LatestTasks:
             futs, self._latest = list(self._latest.values()), {}
         for f in futs:
             f.cancel()
+
+
+def _nice(n: int) -> None:
+    import os
+    try:
+        os.nice(n)
+    except OSError:
+        pass

@@ -66,6 +66,7 @@ class Dashboard(pn.viewable.Viewer):
         self.live_note = pn.pane.Markdown("", name="live-note")
         self._ticks = 0
         self._next_pump = 0.0
+        self._period_s = PUMP_MS / 1000.0
         self._locus_key = None
         self._periodic = None
         self._closed = False
@@ -199,7 +200,7 @@ class Dashboard(pn.viewable.Viewer):
         self.pump()
         spent = time.perf_counter() - now
         # idle for as long as the pump took (capped, so a slow update cannot starve the stream)
-        self._next_pump = now + min(0.25, max(0.0, 2.0 * spent - PUMP_MS / 1000.0))
+        self._next_pump = now + min(0.25, max(0.0, 2.0 * spent - self._period_s))
 
     def pump(self) -> int:
         """Drain the outbox and update the page; returns the number of rows streamed."""
@@ -278,7 +279,9 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ lifecycle
     def start_periodic(self) -> None:
-        self._periodic = pn.state.add_periodic_callback(self.tick, period=PUMP_MS)
+        from .server_limits import stream_period_ms
+        self._period_s = stream_period_ms(PUMP_MS) / 1000.0
+        self._periodic = pn.state.add_periodic_callback(self.tick, period=stream_period_ms(PUMP_MS))
 
     def close(self, *args) -> None:
         if self._closed:

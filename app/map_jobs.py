@@ -18,7 +18,8 @@ from typing import Optional
 
 from amra_core.boundary import MapSpec, cell_class, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
-from amra_core.store import CellStore
+
+from .server_limits import Busy, FairSlots, lower_priority_of_this_thread, open_store
 
 from .settings import ServerSettings
 
@@ -35,8 +36,9 @@ class MapJob:
         self.cells: list = []
         self.cached = 0
         self.estimated_total = len(spec.cg_values) * spec.n_coarse
-        self.state = "queued"  #: queued | running | done | cancelled | failed
+        self.state = "queued"  #: queued | running | done | cancelled | failed | busy
         self.error = ""
+        self.store_error = ""  #: a store write that failed during this job (the map went on)
         self.cancel = threading.Event()
         self.subscribers: set = set()
         self.started_at = time.time()
@@ -49,9 +51,10 @@ class MapJob:
         self._thread.join(timeout)
 
     def _run(self) -> None:
+        lower_priority_of_this_thread()  # maps yield the CPU to interactive runs (server_limits)
         reg = self._registry
-        with reg.slots:
-            if self.cancel.is_set():
+        with reg.slots.slot(self, self.cancel) as got:  # first come, first served (server_limits)
+            if not got or self.cancel.is_set():
                 self.state = "cancelled"
                 return
             self.state = "running"
@@ -63,6 +66,7 @@ class MapJob:
                 ex = DaskExecutor(sched) if sched else LocalPoolExecutor(reg.settings.map_workers)
                 run = iter_map(self.spec, executor=ex, store=reg.store, cancel=self.cancel)
                 for cell in run:
+                    self.store_error = getattr(run, "store_error", "")
                     with self._lock:
                         self.cells.append(cell)
                         self.cached = run.cached
@@ -84,7 +88,9 @@ class MapJob:
             cells = list(self.cells[since:])
             n = len(self.cells)
             return {"cells": cells, "n": n, "cached": self.cached, "total": max(self.estimated_total, n),
-                    "state": self.state, "error": self.error}
+                    "state": self.state, "error": self.error,
+                    "position": self._registry.slots.position(self) if self.state == "queued" else 0,
+                    "notice": self._registry.store_notice or self.store_error}
 
     def all_cells(self) -> list:
         with self._lock:
@@ -114,8 +120,9 @@ class MapRegistry:
 
     def __init__(self, settings: ServerSettings, max_running: int = 1, max_jobs: int = 24):
         self.settings = settings
-        self.store = CellStore(settings.store_path, solver=solver_fingerprint())
-        self.slots = threading.BoundedSemaphore(max_running)
+        # a store that cannot be used leaves None and a notice for the page (server_limits)
+        self.store, self.store_notice = open_store(settings.store_path, solver_fingerprint())
+        self.slots = FairSlots(max_running)
         self.max_jobs = max_jobs
         self._lock = threading.Lock()
         self._jobs: "OrderedDict[MapSpec, MapJob]" = OrderedDict()
@@ -125,8 +132,13 @@ class MapRegistry:
     def subscribe(self, spec: MapSpec, who) -> MapJob:
         with self._lock:
             job = self._jobs.get(spec)
-            if job is None or job.state in ("cancelled", "failed"):
+            if job is None or job.state in ("cancelled", "failed", "busy"):
                 job = MapJob(spec, self)
+                try:
+                    self.slots.admit(job)
+                except Busy as exc:  # the queue is full: say so at once, compute nothing
+                    job.state, job.error = "busy", str(exc)
+                    return job
                 self._jobs[spec] = job
                 self._live = [j for j in self._live if j.state in ("queued", "running")] + [job]
                 self.jobs_started += 1
@@ -173,7 +185,8 @@ class MapRegistry:
             job.cancel.set()
         for job in jobs:
             job.join(10.0)
-        self.store.close()
+        if self.store is not None:
+            self.store.close()
 
 
 def get_registry(settings: Optional[ServerSettings] = None) -> MapRegistry:
@@ -183,6 +196,6 @@ def get_registry(settings: Optional[ServerSettings] = None) -> MapRegistry:
     if reg is None:
         new = MapRegistry(settings or ServerSettings.from_env())
         reg = pn.state.cache.setdefault(CACHE_KEY, new)
-        if reg is not new:  # another session created it at the same moment
+        if reg is not new and new.store is not None:  # another session created it at the same moment
             new.store.close()
     return reg

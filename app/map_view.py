@@ -74,7 +74,7 @@ class MapView(pn.viewable.Viewer):
 
     # -- subscription
     def follow(self, spec: MapSpec) -> None:
-        if self.job is not None and self.job.spec == spec and self.job.state not in ("cancelled", "failed"):
+        if self.job is not None and self.job.spec == spec and self.job.state not in ("cancelled", "failed", "busy"):
             return
         self.release()
         self.job = self.registry.subscribe(spec, self.who)
@@ -92,6 +92,10 @@ class MapView(pn.viewable.Viewer):
         """Pull new cells and progress from the job (event loop)."""
         if self.job is None:
             return
+        if self.job.state == "busy":  # the server's map queue was full: ask again every few seconds
+            self._busy_polls = getattr(self, "_busy_polls", 0) + 1
+            if self._busy_polls % 10 == 0:
+                self.follow(self.job.spec)
         snap = self.job.snapshot(self.seen)
         if snap["cells"]:
             self.cells.extend(snap["cells"])
@@ -102,10 +106,14 @@ class MapView(pn.viewable.Viewer):
         if self.progress.value != pct:
             self.progress.value = pct
         spec = self.job.spec
-        state = {"queued": "waiting for a free map worker", "running": "computing", "done": "complete",
-                 "cancelled": "cancelled", "failed": f"failed: {snap['error']}"}[snap["state"]]
+        queued = f"queued, position {snap['position']}" if snap.get("position") else "waiting for a free map worker"
+        state = {"queued": queued, "running": "computing", "done": "complete",
+                 "cancelled": "cancelled", "failed": f"failed: {snap['error']}",
+                 "busy": snap["error"]}[snap["state"]]
         text = (f"**Map** ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): {state}; "
                 f"{snap['n']} cells ({snap['cached']} from the store) of about {total}")
+        if snap.get("notice"):  # the store could not be used or written (server_limits.open_store)
+            text += f"\n\n**Result store:** {snap['notice']}"
         if self.status.object != text:
             self.status.object = text
         related = self.registry.related(spec)

@@ -1,24 +1,26 @@
 #!/usr/bin/env python
-"""Benchmark of the boundary map engine (issue 4 targets on a 2-core machine).
+"""Benchmark of the boundary map engine (issue 8 §5 targets, 16 columns at 2 %, on a 2-core machine).
 
-Measures, and prints as JSON:
-* the 16-column rigid axial map (paper-boundary, EA 0.32, GJ 30-3000, 2 %) on a local pool of
-  ``--workers`` processes with a fresh store: wall time [s], cells, cells/s (target <= 60 s);
-* the same map repeated from the store: wall time [s] (target <= 1 s);
-* eigen vs time marching on the same cells (the rigid coarse grid of a few CG columns, in this
-  process): cells/s of each and the speed-up of the eigen path, plus the boundaries of both on
-  those columns;
-* unless ``--no-fem``: the 16-column fem-coupled map (target <= 10 min).
+Measures, and prints as JSON (each map on a local pool of ``--workers`` processes, fresh):
+* ``rigid_axial``: the 16-column rigid axial map (paper-boundary, EA 0.32, GJ 30-3000, 2 %): wall
+  time [s], cells, cells/s (target <= 5 s); then the same map from a store (target <= 1 s);
+* ``rigid_mu0.1``: the rigid map at mu = 0.1 (target <= 30 s);
+* ``fem-coupled_mu0.1`` (unless ``--no-fem``): the fem-coupled map at mu = 0.1 (target <= 120 s);
+* ``fem-coupled_axial`` (only with ``--only``): the fem-coupled axial map (no target);
+* ``revolutions``: revolutions marched per cell, split into trim and monodromy, from one forward
+  column walked in this process (rigid, and fem-coupled unless ``--no-fem``; CG ``--rev-cg``).
+Also the machine's load average before and after, since the machine is shared.
 
 The Numba kernels are compiled (or loaded from the cache) in this process first, so the workers load
 them from the on-disk cache; that warm-up is reported separately.
 
-    python scripts/bench_map.py [--workers 2] [--no-fem] [--time-columns 0.36,0.42]
+    python scripts/bench_map.py [--workers 2] [--no-fem] [--only rigid_axial,rigid_mu0.1] [--rev-cg 0.40]
 """
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 import tempfile
@@ -27,69 +29,93 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from amra_core.boundary import MapSpec, compute_cell, run_map, solver_fingerprint  # noqa: E402
+from amra_core.boundary import MapSpec, compute_column, run_map, solver_fingerprint  # noqa: E402
 from amra_core.store import CellStore  # noqa: E402
 
 
 def _map_figures(bmap) -> dict:
+    def fin(g):
+        return None if g is None else ("inf" if not math.isfinite(g) else round(g, 1))
     return {"wall_time_s": round(bmap.wall_time_s, 3), "cells": bmap.cases, "cached_cases": bmap.cached_cases,
             "cells_per_s": round(bmap.cells_per_s, 2) if bmap.computed_cases else None,
-            "coarse_phase_s": round(bmap.phases.get("coarse_s", float("nan")), 3),
             "verdicts": {k: v for k, v in bmap.verdict_counts().items() if v},
-            "critical_gj": [[round(cg, 4), None if g is None else (round(g, 1) if g != float("inf") else "inf")]
-                            for cg, g in bmap.critical_gj],
-            "statuses": sorted({c["status"] for c in bmap.columns}), "executor": bmap.executor}
+            "critical_gj": [[round(cg, 4), fin(g)] for cg, g in bmap.critical_gj],
+            "statuses": sorted({c["status"] for c in bmap.columns}), "executor": bmap.executor,
+            "intervals": {f"{c['cg']:.3f}": "; ".join(f"{iv['kind']} {iv['gj_lo_nm2']:.0f}-{iv['gj_hi_nm2']:.0f}"
+                                                       for iv in c["intervals"]) for c in bmap.columns}}
+
+
+def _revolutions(fidelity: str, cg: float) -> dict:
+    """Walk one mu = 0.1 column in this process, counting the revolutions every kernel march covers."""
+    from amra_core import kernel_guard
+    from amra_core.column import walk_column
+    from amra_core.model import Y_OMEGA
+    counts = {"trim": 0.0, "stability": 0.0}
+    real = kernel_guard.advance
+
+    def counting(y, t0, dt, n_steps, *rest):
+        caller = sys._getframe(1).f_globals.get("__name__", "")
+        counts["stability" if caller.endswith(".stability") else "trim"] += n_steps * dt * float(y[Y_OMEGA]) / (2 * math.pi)
+        return real(y, t0, dt, n_steps, *rest)
+
+    kernel_guard.advance = counting
+    try:
+        spec = MapSpec(fidelity=fidelity, mu=0.1)
+        t = time.perf_counter()
+        w = walk_column(spec.base_rotor, spec.flight, spec.settings, cg, spec.gj_min, spec.gj_max,
+                        rel_tol=spec.gj_rel_tol, max_step=spec.max_step, n_probe=spec.n_coarse)
+        wall = time.perf_counter() - t
+    finally:
+        kernel_guard.advance = real
+    n = max(len(w.points), 1)
+    return {"cg": cg, "points": len(w.points), "trims": w.n_trims, "wall_time_s": round(wall, 2),
+            "revolutions_per_cell_trim": round(counts["trim"] / n, 1),
+            "revolutions_per_cell_monodromy": round(counts["stability"] / n, 1),
+            "revolutions_per_cell": round((counts["trim"] + counts["stability"]) / n, 1),
+            "note": "the trim revolutions include the cold trim at the top of the column"}
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--no-fem", action="store_true", help="skip the fem-coupled map")
-    ap.add_argument("--time-columns", default="0.36,0.42", help="CG columns for eigen vs time marching")
+    ap.add_argument("--only", default="", help="comma-separated subset of rigid_axial, rigid_mu0.1, "
+                                               "fem-coupled_mu0.1, revolutions")
+    ap.add_argument("--rev-cg", type=float, default=0.40, help="CG of the column whose revolutions are counted")
     args = ap.parse_args(argv)
-    out = {"solver": solver_fingerprint(), "cpu_count": os.cpu_count(), "workers": args.workers}
+    only = set(filter(None, args.only.split(",")))
 
+    def want(k):
+        return (not only or k in only) and not (args.no_fem and k.startswith("fem"))
+
+    out = {"solver": solver_fingerprint(), "cpu_count": os.cpu_count(), "workers": args.workers,
+           "load_average_before": [round(x, 2) for x in os.getloadavg()]}
     t0 = time.perf_counter()
-    for fid in ("rigid",) + (() if args.no_fem else ("fem-coupled",)):
-        spec = MapSpec(fidelity=fid)
-        compute_cell(spec.task(0.40, 1500.0))
-    compute_cell(MapSpec(method="time").task(0.40, 1500.0))
+    for fid, mu in (("rigid", 0.0), ("rigid", 0.1)) + ((("fem-coupled", 0.1),) if want("fem-coupled_mu0.1") else ()):
+        spec = MapSpec(fidelity=fid, mu=mu, cg_values=(0.40,), gj_min=2500.0)
+        compute_column(spec.column_task(0.40))
     out["warm_up_s"] = round(time.perf_counter() - t0, 3)
 
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "cells.sqlite"
-        with CellStore(path, solver=solver_fingerprint()) as st:
-            first = run_map(MapSpec(), workers=args.workers, store=st)
-            out["rigid_axial_16col"] = _map_figures(first)
-            t = time.perf_counter()
-            again = run_map(MapSpec(), workers=args.workers, store=st)
-            out["rigid_axial_16col_from_store"] = {"wall_time_s": round(time.perf_counter() - t, 3),
-                                                   "cells": again.cases, "cached_cases": again.cached_cases,
-                                                   "same_critical_gj": again.critical_gj == first.critical_gj}
-
-    cgs = tuple(float(x) for x in args.time_columns.split(","))
-    cmp = {}
-    for method in ("eigen", "time"):
-        spec = MapSpec(cg_values=cgs, method=method)
-        t = time.perf_counter()
-        for cg in cgs:
-            for gj in spec.coarse_gj:
-                compute_cell(spec.task(cg, gj))
-        n = len(cgs) * len(spec.coarse_gj)
-        cells_per_s = n / (time.perf_counter() - t)
-        bm = run_map(spec, workers=args.workers)
-        cmp[method] = {"serial_cells_per_s": round(cells_per_s, 2), "map_wall_time_s": round(bm.wall_time_s, 3),
-                       "map_cells": bm.cases, "critical_gj": [[cg, g] for cg, g in bm.critical_gj],
-                       "kinds": [c.get("kind") for c in bm.columns]}
-    cmp["eigen_speedup_per_cell"] = round(cmp["eigen"]["serial_cells_per_s"] / cmp["time"]["serial_cells_per_s"], 1)
-    cmp["critical_gj_time_over_eigen"] = [
-        round(gt / ge, 4) if ge and gt and ge != float("inf") and gt != float("inf") else None
-        for (_, ge), (_, gt) in zip(cmp["eigen"]["critical_gj"], cmp["time"]["critical_gj"])]
-    out["eigen_vs_time"] = cmp
-
-    if not args.no_fem:
-        fem = run_map(MapSpec(fidelity="fem-coupled"), workers=args.workers)
-        out["fem_coupled_axial_16col"] = _map_figures(fem)
+    if want("rigid_axial"):
+        with tempfile.TemporaryDirectory() as tmp:
+            with CellStore(Path(tmp) / "cells.sqlite", solver=solver_fingerprint()) as st:
+                first = run_map(MapSpec(), workers=args.workers, store=st)
+                out["rigid_axial"] = _map_figures(first)
+                t = time.perf_counter()
+                again = run_map(MapSpec(), workers=args.workers, store=st)
+                out["rigid_axial_from_store"] = {"wall_time_s": round(time.perf_counter() - t, 3),
+                                                 "cells": again.cases, "cached_cases": again.cached_cases,
+                                                 "same_critical_gj": again.critical_gj == first.critical_gj}
+    for fid in ("rigid", "fem-coupled"):
+        key = f"{fid}_mu0.1"
+        if want(key):
+            out[key] = _map_figures(run_map(MapSpec(fidelity=fid, mu=0.1), workers=args.workers))
+    if only and "fem-coupled_axial" in only:  # not a target: only on request
+        out["fem-coupled_axial"] = _map_figures(run_map(MapSpec(fidelity="fem-coupled"), workers=args.workers))
+    if want("revolutions"):
+        out["revolutions"] = {fid: _revolutions(fid, args.rev_cg)
+                              for fid in ("rigid",) + (() if args.no_fem else ("fem-coupled",))}
+    out["load_average_after"] = [round(x, 2) for x in os.getloadavg()]
     print(json.dumps(out, indent=2))
     return 0
 

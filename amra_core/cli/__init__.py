@@ -1,7 +1,8 @@
 """``amra`` command line: one module per sub-command, shared argument helpers in :mod:`.common`.
 
 Bad input exits with code 2 and a one-line message naming the parameter and its allowed range;
-never a traceback. Long runs show progress on stderr when it is a terminal.
+never a traceback. Output paths are checked before any work starts. ``--json`` output is strict
+JSON: a number that is not finite is written as ``null``. Long runs show progress on stderr when it is a terminal.
 """
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from .. import __version__
 from ..flight import SettingsError
 from ..rotor import RotorError
 from . import bench, boundary, modes, rotor, serve, simulate, stability, trim, validate
-from .common import UsageError
+from .common import UsageError, check_outputs
 
 COMMANDS = (rotor, modes, trim, simulate, stability, bench, serve, boundary, validate)
 
@@ -30,6 +31,7 @@ def main(argv=None) -> int:
     ap = build_parser()
     args = ap.parse_args(argv)
     try:
+        check_outputs(args)  # --out/--plot/report folders: before any work, not after it
         rc = args.func(args)
     except (RotorError, SettingsError, UsageError, ValueError) as exc:
         print(f"amra {args.command}: error: {exc}", file=sys.stderr)

@@ -1,10 +1,14 @@
 """Argument helpers shared by every ``amra`` sub-command: number and range parsers with the
-allowed range in their messages, the rotor and flight arguments, and output."""
+allowed range in their messages, the rotor and flight arguments, output-path checks (before any
+work starts) and strict JSON output (non-finite numbers become ``null``, never ``NaN``/``Infinity``)."""
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import math
+import os
+import stat
 
 from ..flight import FlightCondition
 from ..shapes import FIDELITIES
@@ -48,7 +52,8 @@ def flight_args(p):
 
 def load_rotor(args):
     from ..rotor_io import load_preset, load_rotor_file
-    rotor = load_rotor_file(args.rotor) if args.rotor else load_preset(args.preset or "mccutcheon")
+    rotor = (load_rotor_file(args.rotor) if args.rotor is not None
+             else load_preset("mccutcheon" if args.preset is None else args.preset))
     if hasattr(args, "gj"):
         rotor = rotor.with_overrides(gj_nm2=args.gj, x_ea=args.ea, x_cg=args.cg)
     return rotor
@@ -62,7 +67,7 @@ def flight(args, omega_hold=None):
 
 def emit(obj, as_json):
     if as_json:
-        print(json.dumps(obj, indent=2, default=jsonable))
+        print(dumps_strict(obj))
     else:
         for k, v in obj.items():
             if isinstance(v, float):
@@ -105,3 +110,110 @@ def value_range(name, lo, hi, with_count):
             raise argparse.ArgumentTypeError(f"{name} = {text!r} is not allowed: B must exceed A")
         return (a, b)
     return parse
+
+
+def strict(obj):
+    """A JSON-safe copy of ``obj``: numpy scalars and arrays to Python, non-finite floats to None."""
+    import numpy as np
+    if isinstance(obj, bool) or obj is None or isinstance(obj, (str, int)):
+        return obj
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {str(k) if not isinstance(k, str) else k: strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [strict(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return strict(obj.tolist())
+    if isinstance(obj, (np.floating, np.integer, np.bool_)):
+        return strict(obj.item())
+    if hasattr(obj, "to_dict"):
+        return strict(obj.to_dict())
+    raise TypeError(f"{type(obj).__name__} is not JSON serialisable")
+
+
+def dumps_strict(obj, indent=2) -> str:
+    """Strict JSON (RFC 8259): every non-finite number is written as ``null``."""
+    return json.dumps(strict(obj), indent=indent, allow_nan=False)
+
+
+# ----------------------------------------------------------------------------- output paths
+_NOT_REGULAR = {stat.S_IFDIR: "a directory", stat.S_IFIFO: "a FIFO (named pipe)", stat.S_IFCHR: "a device",
+                stat.S_IFBLK: "a device", stat.S_IFSOCK: "a socket"}
+
+
+def _writable_dir(flag, path, folder) -> None:
+    try:
+        st = os.stat(folder)
+    except FileNotFoundError:
+        raise UsageError(f"{flag} {path!r} cannot be written: the folder {folder!r} does not exist") from None
+    except OSError as exc:
+        raise UsageError(f"{flag} {path!r} cannot be written: the folder {folder!r}: {exc.strerror}") from None
+    if not stat.S_ISDIR(st.st_mode):
+        raise UsageError(f"{flag} {path!r} cannot be written: {folder!r} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise UsageError(f"{flag} {path!r} cannot be written: the folder {folder!r} is read-only or not writable "
+                         f"by this user")
+
+
+def check_output_file(flag: str, path: str) -> None:
+    """Raise :class:`UsageError` unless ``path`` can be written as a regular file: it must not be
+    a directory, FIFO, device or socket (``/dev/full``), its folder must exist and be writable."""
+    if not path or "\x00" in path:
+        raise UsageError(f"{flag} {path!r} is not allowed: not a usable file name")
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        if os.path.lexists(path):
+            raise UsageError(f"{flag} {path!r} is not allowed: a dangling symbolic link") from None
+        st = None
+    except OSError as exc:
+        why = "a symbolic link loop" if exc.errno == errno.ELOOP else exc.strerror
+        raise UsageError(f"{flag} {path!r} cannot be written: {why}") from None
+    if st is not None:
+        if not stat.S_ISREG(st.st_mode):
+            kind = _NOT_REGULAR.get(stat.S_IFMT(st.st_mode), "not a regular file")
+            raise UsageError(f"{flag} {path!r} is not allowed: it is {kind}; give a file name")
+        if not os.access(path, os.W_OK):
+            raise UsageError(f"{flag} {path!r} cannot be written: the file is read-only or not writable by this user")
+    if len(os.path.basename(path).encode()) > 255:
+        raise UsageError(f"{flag} {path!r} is not allowed: the file name is longer than 255 bytes")
+    _writable_dir(flag, path, os.path.dirname(os.path.abspath(path)))
+
+
+def check_output_dir(flag: str, path: str) -> None:
+    """Raise :class:`UsageError` unless ``path`` is a writable folder or can be created as one
+    (its parent exists and is writable)."""
+    if not path or "\x00" in path:
+        raise UsageError(f"{flag} {path!r} is not allowed: not a usable folder name")
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        if os.path.lexists(path):
+            raise UsageError(f"{flag} {path!r} is not allowed: a dangling symbolic link") from None
+        if len(os.path.basename(os.path.normpath(path)).encode()) > 255:
+            raise UsageError(f"{flag} {path!r} is not allowed: the folder name is longer than 255 bytes")
+        _writable_dir(flag, path, os.path.dirname(os.path.abspath(path)))
+        return
+    except OSError as exc:
+        why = "a symbolic link loop" if exc.errno == errno.ELOOP else exc.strerror
+        raise UsageError(f"{flag} {path!r} cannot be written: {why}") from None
+    if not stat.S_ISDIR(st.st_mode):
+        kind = _NOT_REGULAR.get(stat.S_IFMT(st.st_mode), "a file")
+        raise UsageError(f"{flag} {path!r} is not allowed: it is {kind}, not a folder")
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise UsageError(f"{flag} {path!r} cannot be written: the folder is read-only or not writable by this user")
+
+
+#: output arguments per sub-command: (attribute, flag, "file" | "dir")
+OUTPUT_ARGS = {"validate": (("out", "--out", "dir"),)}
+_DEFAULT_OUTPUTS = (("out", "--out", "file"), ("plot", "--plot", "file"))
+
+
+def check_outputs(args) -> None:
+    """Check every output path of the parsed ``args`` before the command does any work."""
+    for attr, flag, kind in OUTPUT_ARGS.get(getattr(args, "command", ""), _DEFAULT_OUTPUTS):
+        path = getattr(args, attr, None)
+        if path is None:
+            continue
+        (check_output_dir if kind == "dir" else check_output_file)(flag, path)

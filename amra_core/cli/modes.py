@@ -4,14 +4,14 @@ from __future__ import annotations
 import json
 
 from ..shapes import FIDELITIES
-from .common import jsonable, load_rotor, number, rotor_args
+from .common import dumps_strict, load_rotor, number, rotor_args
 
 
 def cmd_modes(args):
     from ..modes import modes_report
     rep = modes_report(load_rotor(args), args.fidelity, args.elements, args.omega)
     if args.json:
-        print(json.dumps(rep, indent=2, default=jsonable))
+        print(dumps_strict(rep))
     else:
         print(f"{'mode':28s} {'f [Hz]':>10s} {'per rev':>8s}")
         for m in rep["modes"]:

@@ -15,7 +15,18 @@ def cmd_simulate(args):
     settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, inflow=args.inflow, n_elements=args.elements)
     case = Case(rotor, flight(args), settings, t_end_s=args.t_end)
     t0 = time.perf_counter()
-    sim = Simulation(case)
+    from ..model import compile_model
+    from ..trim import trim
+    tr = trim(compile_model(case.rotor, case.flight, case.settings))
+    if not tr.ok and tr.state is None:  # not even a branch end to start from: the verdict is the trim's
+        out = {"verdict": "no-autorotation", "growth_rate_per_s": None, "frequency_hz": None,
+               "collapse_time_s": None, "explanation": tr.reason or "no trimmed state to start from",
+               "run_status": "not-started", "start": "not started: no trimmed state, not even a branch end",
+               "trim": tr.to_dict(), "sim_time_s": 0.0, "wall_time_s": time.perf_counter() - t0,
+               "case_key": case.key(), "fidelity": settings.fidelity, "aero": settings.aero}
+        emit(out, args.json)
+        return 0
+    sim = Simulation(case, trim_result=tr)
     tty = sys.stderr.isatty() and not args.quiet
 
     def progress(t, t_end):

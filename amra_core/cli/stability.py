@@ -4,7 +4,7 @@ from __future__ import annotations
 import json
 
 from ..flight import AERO_MODELS, SolverSettings
-from .common import flight, flight_args, jsonable, load_rotor, rotor_args
+from .common import flight, flight_args, dumps_strict, load_rotor, rotor_args
 
 
 def cmd_stability(args):
@@ -16,7 +16,7 @@ def cmd_stability(args):
     if not res.trim.ok:
         out["reason"] = res.trim.reason
     if args.json:
-        print(json.dumps(out, indent=2, default=jsonable))
+        print(dumps_strict(out))
     else:
         print(f"stable: {out['stable']}  ({out['method']}; trim {res.trim.status})")
         print(f"{'mode':14s} {'f [Hz]':>9s} {'zeta [-]':>9s} {'Re [1/s]':>10s}")

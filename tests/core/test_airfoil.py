@@ -4,8 +4,8 @@ import math
 import numpy as np
 import pytest
 
-from amra_core.airfoil import (AIRFOIL_FILES, AirfoilTable, airfoil_coefficients, coefficients,
-                               compile_airfoil, load_airfoil)
+from amra_core.airfoil import (AIRFOIL_FILES, SYMMETRISE_DEG, AirfoilTable, airfoil_coefficients,
+                               coefficients, compile_airfoil, load_airfoil, symmetrised)
 
 NAMES = sorted(AIRFOIL_FILES)
 
@@ -55,6 +55,56 @@ def test_table_points_reproduced(table_and_arrays):
     for a, cl, cd, cm in zip(table.alpha_deg, table.cl, table.cd, table.cm):
         got = airfoil_coefficients(math.radians(a), 0.0, *arr)
         assert got == pytest.approx((cl, cd, cm), abs=1e-9, rel=0.0), a
+
+
+@pytest.mark.parametrize("name", NAMES)
+def test_raw_table_points_reproduced(name):
+    """The digitised points stay loadable (raw=True) and are reproduced by the lookup too."""
+    table = load_airfoil(name, raw=True)
+    arr = compile_airfoil(table)
+    for a, cl, cd, cm in zip(table.alpha_deg, table.cl, table.cd, table.cm):
+        assert airfoil_coefficients(math.radians(a), 0.0, *arr) == pytest.approx((cl, cd, cm), abs=1e-9, rel=0.0)
+
+
+def test_critzos_attached_range_symmetrised():
+    """NACA 0012 is symmetric: in |alpha| <= 15 deg the loaded Critzos table has Cl odd, Cd even
+    (both the digitised positive-alpha branch) and Cm odd, with Cm = 0 where the file holds the
+    digitiser's constant -0.0149 (-9..9 deg after mirroring); outside the range, and for the
+    positive branch's Cl and Cd, the raw points are unchanged. The raw file is not symmetric
+    (Cl -0.557 at -5 deg against +0.538 at +5, Cd 0.0178 against 0.0093)."""
+    raw, sym = load_airfoil("naca0012_critzos", raw=True), load_airfoil("naca0012_critzos")
+    assert SYMMETRISE_DEG["naca0012_critzos"] == 15.0
+    a = np.array(raw.alpha_deg)
+    rc = {k: np.array(getattr(raw, k)) for k in ("cl", "cd", "cm")}
+    sc = {k: np.array(getattr(sym, k)) for k in ("cl", "cd", "cm")}
+    i5, im5 = int(np.flatnonzero(a == 5.0)[0]), int(np.flatnonzero(a == -5.0)[0])
+    assert (rc["cl"][im5], rc["cl"][i5], rc["cd"][im5], rc["cd"][i5]) == (-0.5573, 0.5384, 0.0178, 0.0093)
+    for i in np.flatnonzero(np.abs(a) <= 15.0):
+        j = int(np.flatnonzero(a == -a[i])[0])
+        assert sc["cl"][i] == -sc["cl"][j] and sc["cd"][i] == sc["cd"][j] and sc["cm"][i] == -sc["cm"][j]
+        if a[i] >= 0:
+            assert sc["cl"][i] == rc["cl"][i] and sc["cd"][i] == rc["cd"][i]
+        if abs(a[i]) <= 9.0:
+            assert sc["cm"][i] == 0.0
+        assert abs(sc["cm"][i]) <= 0.035
+    out = np.abs(a) > 15.0
+    for k in ("cl", "cd", "cm"):
+        assert np.array_equal(sc[k][out], rc[k][out])
+    assert "symmetrised" in sym.origin and "symmetrised" not in raw.origin
+    # the kernel sees the symmetric data: Cl(-a) = -Cl(a), Cd(-a) = Cd(a) between table points too
+    # (up to 14 deg: PCHIP slopes at +-15 deg depend on the unsymmetric points at +-16 deg)
+    arr = compile_airfoil(sym)
+    for deg in (0.3, 2.7, 6.1, 11.4, 13.6):
+        p, m = (airfoil_coefficients(math.radians(s_ * deg), 0.0, *arr) for s_ in (1.0, -1.0))
+        assert p[0] == pytest.approx(-m[0], abs=1e-12) and p[1] == pytest.approx(m[1], abs=1e-12)
+        assert p[2] == pytest.approx(-m[2], abs=1e-12)
+
+
+def test_symmetrised_needs_mirror_points():
+    a = (-180.0, -10.0, 0.0, 5.0, 180.0)
+    z = (0.0,) * 5
+    with pytest.raises(ValueError, match="cannot symmetrise, no point at alpha = 10.0"):
+        symmetrised(AirfoilTable("x", "", a, z, z, z), 15.0)
 
 
 def test_periodicity(table_and_arrays):

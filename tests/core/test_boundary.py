@@ -79,9 +79,12 @@ def test_full_map_brackets_every_column_to_tolerance(full_map):
             assert hi / lo - 1 <= 0.02 + 1e-9
             assert col["critical_gj"] == hi  # the upper end of the final bracket
             assert col["kind"] in ("flutter", "fold")
+        assert col["intervals"] and col["intervals"][-1]["kind"] == "stable"
     for b in bmap.boundaries:
-        assert b["kind"] in ("flutter", "fold") and b["resolved"]
+        assert b["kind"] in ("flutter", "fold", "windmill-brake")
         assert b["gj_lo"] < b["gj"] < b["gj_hi"]
+        if "stable" in (b["below"], b["above"]):  # every change of stability on a branch: to tolerance
+            assert b["resolved"], b
     # each column's cells above its critical GJ are all stable, the one just below is not
     for col in bmap.columns:
         cells = [c for c in bmap.cells if c.cg == col["cg"]]
@@ -91,27 +94,43 @@ def test_full_map_brackets_every_column_to_tolerance(full_map):
             assert not max((c for c in cells if c.gj_nm2 < g), key=lambda c: c.gj_nm2).stable
 
 
+def test_no_windmill_state_counted_stable(full_map):
+    """Issue 8: the old map read GJ 68-280 at CG 0.36 stable (windmill-brake roots); now every
+    windmill-brake cell is its own class and the CG 0.36 column reads like its neighbours."""
+    bmap, _, _ = full_map
+    wb = [c for c in bmap.cells if c.verdict == "windmill-brake"]
+    assert wb and not any(c.stable for c in wb)
+    assert all(c.descent_rate_m_s > 2.0 * 5.0 for c in wb)
+    crit = dict((round(cg, 6), g) for cg, g in bmap.critical_gj)
+    assert crit[0.36] > 300.0 and crit[0.34] > 300.0 and crit[0.38] > 300.0
+
+
 def test_critical_gj_rises_as_cg_moves_aft(full_map):
-    """The paper: CG aft of the EA is destabilising (model-notes section 6)."""
+    """The paper: CG aft of the EA is destabilising (model-notes section 6). Aft of CG 0.40 each
+    column's boundary is the fold of its branch and rises monotonically; CG 0.36-0.38 end in flutter
+    windows above their folds, so the rise is checked from the fold-bounded columns and end to end."""
     bmap, _, _ = full_map
     aft = [(cg, g) for cg, g in bmap.critical_gj if cg >= EA + 0.03]
     assert len(aft) >= 6
     gjs = [g for _, g in aft]
     assert all(g is not None and math.isfinite(g) for g in gjs), aft
-    assert all(b > a for a, b in zip(gjs, gjs[1:])), aft
+    folds = [g for cg, g in aft if cg >= 0.40 - 1e-9]
+    assert all(b > a for a, b in zip(folds, folds[1:])), aft
+    assert gjs[-1] > gjs[0]
 
 
-def test_progressive_coarse_grid_first():
-    """In one process the order is strict: the whole coarse grid, then the bisection cells (a
-    pool submits in this order, but a bisection cell may finish before a slow coarse one)."""
+def test_serial_map_streams_points_as_the_walk_finds_them():
+    """In one process the cells of a column come as its walk finds them: the stiffest blade first,
+    then downward (bisection points in between), one column after the other."""
     seen = []
     spec = MapSpec(cg_values=(0.40, 0.46))
     bmap = run_map(spec, workers=1, on_cell=seen.append)
-    n_coarse = len(spec.cg_values) * spec.n_coarse
-    coarse = set(spec.coarse_gj)
-    assert len(seen) == bmap.cases > n_coarse
-    assert all(c.gj_nm2 in coarse for c in seen[:n_coarse])
-    assert all(c.gj_nm2 not in coarse for c in seen[n_coarse:])
+    assert len(seen) == bmap.cases
+    first = [c for c in seen if c.cg == 0.40]
+    assert seen[:len(first)] == first  # column by column
+    assert first[0].gj_nm2 == spec.gj_max and first[0].stable
+    walk = [c.gj_nm2 for c in first if c.branch == "normal"]
+    assert walk[:5] == sorted(walk[:5], reverse=True)
 
 
 def test_rigid_paper_point_is_on_the_unstable_side(full_map):
@@ -139,28 +158,64 @@ def test_fem_coupled_paper_point_is_on_the_unstable_side():
 
 
 # ----------------------------------------------------------------------------- robustness
-def test_failed_case_is_recorded_and_the_sweep_carries_on(monkeypatch):
-    import amra_core.stability as stability
-    real = stability.assess_cell
+def test_failed_point_is_recorded_and_the_column_not_stored(monkeypatch, tmp_path):
+    import amra_core.column as column
+    real = column.analyse
 
-    def flaky(rotor, flight, settings, method="eigen"):
-        gj = rotor.stations.gj_nm2[0]
-        if abs(gj - 300.0) < 1e-6:
+    def flaky(model, tr, *a, **k):
+        gj = float(model.rotor.stations.gj_nm2[0])
+        if 900.0 < gj < 1100.0:
             raise FloatingPointError("synthetic blow-up")
-        return real(rotor, flight, settings, method)
+        return real(model, tr, *a, **k)
 
-    monkeypatch.setattr(stability, "assess_cell", flaky)
-    spec = MapSpec(cg_values=(0.44,), n_coarse=7)  # coarse GJ 30, 64.6, 139, 300, 646, ...
-    assert 300.0 in spec.coarse_gj
-    bmap = run_map(spec, workers=1)
+    monkeypatch.setattr(column, "analyse", flaky)
+    spec = MapSpec(cg_values=(0.44,))
+    with CellStore(tmp_path / "s.sqlite", solver=solver_fingerprint()) as st:
+        bmap = run_map(spec, workers=1, store=st)
+        assert len(st) == 0  # a column with a failed cell is not stored
     failed = [c for c in bmap.cells if c.verdict == "failed"]
-    assert len(failed) == 1 and "FloatingPointError: synthetic blow-up" in failed[0].reason
+    assert failed and all("FloatingPointError: synthetic blow-up" in c.reason for c in failed)
     assert cell_class(failed[0]) == "failed"
     col = bmap.columns[0]
-    # the boundary above the failed cell is still bisected to tolerance
-    assert col["status"] == "bracketed" and col["bracket"][1] / col["bracket"][0] <= 1.02 + 1e-9
+    assert col["status"] == "unresolved"
     assert any(b["kind"] == "unknown" and not b["resolved"] for b in bmap.boundaries)
     json.dumps(bmap.to_dict(), allow_nan=False)
+
+
+def test_crashed_worker_column_is_never_stored(tmp_path):
+    """A column whose worker died (Outcome.ok False) is shown as failed in this run only."""
+    from amra_core.executor import CellExecutor, Outcome
+
+    class Crashing(CellExecutor):
+        name = "crashing"
+
+        def __init__(self):
+            self.q = []
+
+        def submit(self, fn, arg, tag=None):
+            self.q.append(tag)
+
+        def wait(self, timeout=None):
+            out = [Outcome(t, False, RuntimeError("worker died (segfault)")) for t in self.q]
+            self.q = []
+            return out
+
+        @property
+        def n_pending(self):
+            return len(self.q)
+
+        def cancel_pending(self):
+            self.q = []
+
+    spec = MapSpec(cg_values=(0.40, 0.46))
+    with CellStore(tmp_path / "s.sqlite", solver=solver_fingerprint()) as st:
+        bmap = run_map(spec, executor=Crashing(), store=st)
+        assert len(st) == 0
+    assert bmap.cases > 0 and all(c.verdict == "failed" and "worker died" in c.reason for c in bmap.cells)
+    assert all(col["status"] == "unresolved" for col in bmap.columns)
+    # the next run (a working executor) computes them afresh
+    again = run_map(MapSpec(cg_values=(0.46,)), workers=1, store=tmp_path / "s.sqlite")
+    assert again.cached_cases == 0 and again.verdict_counts()["failed"] == 0
 
 
 def test_cancel_returns_the_partial_map():
@@ -220,7 +275,8 @@ def test_cli_json_contract(tmp_path, capsys):
     assert [round(cg, 6) for cg, _ in d["critical_gj"]] == [0.40, 0.46]
     assert all(g > 100 for _, g in d["critical_gj"])
     assert d["cases"] == len(d["cells"]) > 14 and d["cached_cases"] == 0 and d["wall_time_s"] > 0
-    assert {b["kind"] for b in d["boundaries"]} <= {"flutter", "fold"}
+    assert {b["kind"] for b in d["boundaries"]} <= {"flutter", "fold", "windmill-brake"}
+    assert all(col["intervals"] for col in d["columns"])
     assert png.read_bytes()[:4] == b"\x89PNG" and csv_path.is_file()
     assert cli.main(argv) == 0  # again: everything from the store
     d2 = json.loads(capsys.readouterr().out)

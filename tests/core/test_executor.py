@@ -9,7 +9,8 @@ import pytest
 
 from amra_core import cli
 from amra_core.boundary import MapSpec, run_map
-from amra_core.executor import (DaskExecutor, LocalPoolExecutor, SerialExecutor, make_executor)
+from amra_core.executor import (DaskExecutor, LocalPoolExecutor, SerialExecutor, WorkerDied, cap_workers,
+                                 make_executor, worker_cap)
 
 
 def _square(x):
@@ -43,11 +44,53 @@ def test_batch_yields_every_result_and_failures_as_outcomes(make):
 
 
 def test_pool_survives_a_dead_worker():
-    with LocalPoolExecutor(2) as ex:
+    """A call whose worker always dies is retried on fresh pools, then reported as WorkerDied
+    (never as an answer); the pool keeps working afterwards."""
+    with LocalPoolExecutor(2, max_retries=1) as ex:
         outs = [o for _, o in ex.map_unordered(_die, [0])]
-        assert not outs[0].ok and "BrokenProcessPool" in outs[0].reason
+        assert not outs[0].ok and outs[0].worker_died and isinstance(outs[0].value, WorkerDied)
+        assert "died on each of 2 tries" in outs[0].reason and ex.restarts == 2
         again = dict(ex.map_unordered(_die, [1, 2, 3]))  # a fresh pool after the crash
         assert all(o.ok and o.value == a for a, o in again.items())
+
+
+def _die_once(arg):
+    """Kill the worker the first time ``arg`` (a marker path, value) is run, then answer."""
+    marker, value = arg
+    if not os.path.exists(marker):
+        open(marker, "w").close()
+        os._exit(9)
+    return value * 10
+
+
+def test_a_worker_killed_mid_batch_is_invisible(tmp_path):
+    """Every call in flight when a worker dies is resubmitted on a new pool: all answers arrive,
+    none is a failure."""
+    with LocalPoolExecutor(2) as ex:
+        args = [(str(tmp_path / "m"), i) for i in range(8)]
+        got = dict((a[1], o) for a, o in ex.map_unordered(_die_once, args))
+    assert sorted(got) == list(range(8))
+    assert all(o.ok and o.value == 10 * i for i, o in got.items())
+    assert ex.restarts >= 1
+
+
+def test_worker_count_is_capped():
+    cap = worker_cap()
+    assert cap == 4 * (os.cpu_count() or 1)
+    assert cap_workers(cap + 1)[0] == cap and "per CPU core" in cap_workers(cap + 1)[1]
+    assert cap_workers(2) == (2, "") and cap_workers(None) == (None, "")
+    with pytest.raises(ValueError, match="at most"):
+        LocalPoolExecutor(cap + 1)
+    with pytest.raises(ValueError, match="workers"):
+        LocalPoolExecutor(True)
+
+
+def test_cli_caps_workers_with_a_message(capsys):
+    rc = cli.main(["boundary", "--cg", "0.46:0.46:1", "--coarse", "2", "--tol", "0.5", "--workers", "512",
+                   "--quiet", "--json"])
+    out, err = capsys.readouterr()
+    assert rc == 0 and f"using {worker_cap()}" in err and "per CPU core" in err
+    assert json.loads(out)["executor"] == f"local ({worker_cap()} workers)"
 
 
 def test_make_executor_choices():
@@ -93,3 +136,74 @@ def test_dask_bad_scheduler_is_a_clear_error():
     pytest.importorskip("distributed")
     with pytest.raises(ValueError, match="scheduler"):
         DaskExecutor("tcp://127.0.0.1:9", timeout_s=2)
+
+
+def test_dask_resubmits_a_call_whose_worker_died(tmp_path):
+    """With the scheduler allowed no retries of its own, a killed worker gives KilledWorker at once:
+    the executor resubmits, and the answer arrives."""
+    distributed = pytest.importorskip("distributed")
+    import dask
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}):
+        with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster:
+            with DaskExecutor(cluster.scheduler_address) as ex:
+                got = dict(ex.map_unordered(_die_once, [(str(tmp_path / "m"), 4)]))
+    (a, o), = got.items()
+    assert o.ok and o.value == 40
+
+
+def _certs(folder):
+    """A CA and one certificate signed by it (openssl), for a tls:// cluster."""
+    import shutil
+    import subprocess
+    if shutil.which("openssl") is None:
+        pytest.skip("openssl is not installed: cannot make TLS certificates")
+    ca_key, ca, key, csr, cert = (str(folder / n) for n in ("ca.key", "ca.pem", "k.pem", "c.csr", "c.pem"))
+    run = lambda *a: subprocess.run(a, check=True, capture_output=True)  # noqa: E731
+    run("openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", ca_key, "-out", ca, "-days", "2",
+        "-subj", "/CN=amra-test-ca")
+    run("openssl", "req", "-newkey", "rsa:2048", "-nodes", "-keyout", key, "-out", csr, "-subj", "/CN=localhost")
+    ext = folder / "ext.cnf"
+    ext.write_text("subjectAltName=DNS:localhost,IP:127.0.0.1\n")
+    run("openssl", "x509", "-req", "-in", csr, "-CA", ca, "-CAkey", ca_key, "-CAcreateserial", "-out", cert,
+        "-days", "2", "-extfile", str(ext))
+    return ca, cert, key
+
+
+def test_dask_over_tls(tmp_path, monkeypatch, capsys):
+    distributed = pytest.importorskip("distributed")
+    from distributed.security import Security
+    ca, cert, key = _certs(tmp_path)
+    sec = Security(tls_ca_file=ca, tls_scheduler_cert=cert, tls_scheduler_key=key, tls_worker_cert=cert,
+                   tls_worker_key=key, tls_client_cert=cert, tls_client_key=key, require_encryption=True)
+    with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tls://",
+                                  security=sec, host="127.0.0.1", dashboard_address=None) as cluster:
+        addr = cluster.scheduler_address
+        assert addr.startswith("tls://")
+        with pytest.raises(ValueError, match="cannot connect"):  # no certificates: refused
+            DaskExecutor(addr, timeout_s=3)
+        monkeypatch.setenv("AMRA_DASK_TLS_CA", ca)
+        monkeypatch.setenv("AMRA_DASK_TLS_CERT", cert)
+        monkeypatch.setenv("AMRA_DASK_TLS_KEY", key)
+        with DaskExecutor(addr) as ex:
+            assert dict(ex.map_unordered(_square, [2]))[2].value == 4
+        rc = cli.main(["boundary", "--cg", "0.46:0.46:1", "--coarse", "2", "--tol", "0.5", "--scheduler", addr,
+                       "--quiet", "--json"])
+        out, err = capsys.readouterr()
+        assert rc == 0, err
+        assert json.loads(out)["executor"].startswith("dask (tls://")
+
+
+@pytest.mark.parametrize("addr, why", [("http://host:8786", "must start with"), ("", "scheduler")])
+def test_dask_bad_address_is_a_clear_error(addr, why):
+    pytest.importorskip("distributed")
+    with pytest.raises(ValueError, match=why):
+        DaskExecutor(addr)
+
+
+def test_scheduler_help_warns_about_deserialisation(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(["boundary", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "deserialises" in text and "trusted cluster" in text and "tls://" in text
+    assert "strict JSON" in text

@@ -108,7 +108,9 @@ def test_run_reaches_t_end(mccutcheon):
     sim.run(t_end_s=1.2, chunk_s=0.3)
     assert sim.t >= 1.2 - 1e-9 and sim.t < 1.2 + 2 * sim.dt * sim.record_every
     assert np.all(np.diff(sim.history[:, T]) > 0)
-    assert sim.status == "running"
+    assert sim.status == "finished"  # a finished run says so (issue 8 section 4), ...
+    more = sim.advance(span_s=0.1)  # ... and can be continued
+    assert len(more) > 0 and sim.status == "running"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -135,8 +137,11 @@ def test_set_parameters_continues_from_current_state(mccutcheon):
     np.testing.assert_array_equal(sim.y, y_before)
     assert sim.t == ref.t
 
-    nxt = sim.advance(n_steps=n)
+    # the stable step is recomputed for the new blade, the recording interval is kept
+    assert sim.dt * sim.record_every == pytest.approx(ref.dt * ref.record_every, rel=1e-12)
+    nxt = sim.advance(span_s=n * ref.dt)
     ref_nxt = ref.advance(n_steps=n)
+    assert nxt.shape == ref_nxt.shape
     # continues in time and from where it was (not from trim)
     assert nxt[0, T] == pytest.approx(first[-1, T] + sim.dt * sim.record_every, abs=1e-12)
     for c in ("omega_rad_s", "teeter_rad", "descent_rate_m_s", "inflow_m_s", "azimuth_rad"):

@@ -58,7 +58,7 @@ def test_nominal_mccutcheon_stable(mccutcheon, fidelity, flight):
           f"descent {sim.trim.descent_rate_m_s:.3f} m/s | time marching: {v.verdict}, growth "
           f"{v.growth_rate_per_s:+.4f} 1/s, {v.frequency_hz:.3f} Hz | {res.method}: stable={res.stable}, "
           f"least damped '{crit.label}' Re {crit.real_part_per_s:+.4f} 1/s at {crit.frequency_hz:.2f} Hz")
-    assert sim.status == "running" and sim.t >= 8.0 - 1e-9
+    assert sim.status == "finished" and sim.t >= 8.0 - 1e-9
     assert v.verdict == "stable", v.explanation
     assert v.growth_rate_per_s < 0
     assert res.method == ("eigenvalues" if flight.is_axial else "floquet")

@@ -1,0 +1,325 @@
+"""Many users at once: N concurrent headless Chromium sessions against one AMRA server.
+
+Each session opens the dashboard (``/main?run_s=...``), starts a run, and once points stream,
+moves the GJ slider ``--moves`` times while the run goes on; meanwhile the boundary map of the
+session's case fills (every session follows the map of its current case; sessions with the same
+case share one map job). Measured, in each page with ``performance.now()``:
+
+* **slider latency**: from the slider's release (``pointerup``) to the first streamed point that
+  was computed with the new GJ (the live plot's data carries the GJ of every row);
+* run start: from the Run click to the first streamed point;
+* errors: page exceptions, console errors, an error alert in the page, a websocket that closed,
+  timeouts.
+
+The server (``amra serve``, fresh store per session count) is started by the script unless
+``--url`` is given; its memory (RSS of the whole process tree) is sampled before the sessions and
+while they run, giving the memory per session.
+
+    python scripts/load_test.py --sessions 1 8 16 32 --json load.json
+
+A benchmark, not a timed test (tests/server/test_load.py runs it at N = 8 and asserts no errors).
+"""
+from __future__ import annotations
+
+import argparse
+import asyncio
+import json
+import os
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.request
+from pathlib import Path
+
+#: as in tests/browser/conftest.py (Debian's Chromium, headless in a container)
+CHROMIUM_ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
+                 "--no-first-run", "--disable-sync"]
+CHROMIUM = "/usr/bin/chromium"
+REPO = Path(__file__).resolve().parents[1]
+
+#: in-page helpers: the live plot's data source (columns t_s and gj_nm2), release time, errors
+_INIT_JS = """
+window.__amra = {release: null, wsClosed: 0};
+document.addEventListener('pointerup', () => { window.__amra.release = performance.now(); }, true);
+window.__amraSource = () => {
+  for (const doc of (window.Bokeh ? Bokeh.documents : [])) {
+    for (const m of doc.all_models) {
+      const d = m.data;
+      if (d === undefined || d === null || typeof d !== 'object' || d instanceof Map) continue;
+      if (d.t_s !== undefined && d.gj_nm2 !== undefined) return d;
+    }
+  }
+  return null;
+};
+window.__amraLast = () => {
+  const d = window.__amraSource();
+  if (!d || !d.t_s.length) return null;
+  return {n: d.t_s.length, t: d.t_s[d.t_s.length - 1], gj: d.gj_nm2[d.gj_nm2.length - 1]};
+};
+"""
+
+_WAIT_FIRST_JS = """([t0, timeout_ms]) => new Promise((resolve) => {
+  const iv = setInterval(() => {
+    const last = window.__amraLast();
+    if (last) { clearInterval(iv); resolve(performance.now() - t0); }
+  }, 10);
+  setTimeout(() => { clearInterval(iv); resolve(-1); }, timeout_ms);
+})"""
+
+_WAIT_NEW_GJ_JS = """([old, timeout_ms]) => new Promise((resolve) => {
+  const iv = setInterval(() => {
+    const last = window.__amraLast();
+    const t0 = window.__amra.release;
+    if (last && t0 !== null && Math.abs(last.gj - old) > 1e-6 * Math.abs(old)) {
+      clearInterval(iv); resolve(performance.now() - t0);
+    }
+  }, 10);
+  setTimeout(() => { clearInterval(iv); resolve(-1); }, timeout_ms);
+})"""
+
+
+# ---------------------------------------------------------------------------- server
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def tree_rss_mb(pid: int) -> float:
+    """Resident memory of ``pid`` and all its descendants [MB] (from /proc)."""
+    children: dict = {}
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                with open(f"/proc/{d}/stat") as f:
+                    ppid = int(f.read().rsplit(")", 1)[1].split()[1])
+                children.setdefault(ppid, []).append(int(d))
+            except (OSError, ValueError, IndexError):
+                pass
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        todo += children.get(p, [])
+        try:
+            with open(f"/proc/{p}/statm") as f:
+                total += int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+        except (OSError, ValueError):
+            pass
+    return total / 1e6
+
+
+class Server:
+    """``amra serve`` in its own process group on a free port, with a fresh store."""
+
+    def __init__(self, extra_env=None, args=()):
+        self.port = free_port()
+        self.dir = tempfile.mkdtemp(prefix="amra-load-")
+        env = dict(os.environ, AMRA_STORE=f"{self.dir}/store.sqlite", **(extra_env or {}))
+        self.log = open(f"{self.dir}/serve.log", "wb")
+        self.proc = subprocess.Popen([sys.executable, "-m", "amra_core.cli", "serve", "--address", "127.0.0.1",
+                                      "--port", str(self.port), *args], cwd=REPO, env=env, stdout=self.log,
+                                     stderr=subprocess.STDOUT, start_new_session=True)
+        self.url = f"http://127.0.0.1:{self.port}/main"
+        deadline = time.monotonic() + 180
+        while True:
+            if self.proc.poll() is not None:
+                raise RuntimeError(f"amra serve exited: {Path(self.dir, 'serve.log').read_text()[-2000:]}")
+            try:
+                with urllib.request.urlopen(f"http://127.0.0.1:{self.port}/liveness", timeout=5):
+                    break
+            except OSError:
+                if time.monotonic() > deadline:
+                    raise TimeoutError("amra serve did not answer within 180 s")
+                time.sleep(0.5)
+
+    def rss_mb(self) -> float:
+        """The whole tree: the server and its map worker processes [MB]."""
+        return tree_rss_mb(self.proc.pid)
+
+    def main_rss_mb(self) -> float:
+        """The server process alone (where the sessions live) [MB]."""
+        try:
+            with open(f"/proc/{self.proc.pid}/statm") as f:
+                return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+        except OSError:
+            return 0.0
+
+    def stop(self) -> None:
+        for sig in (signal.SIGTERM, signal.SIGKILL):
+            try:
+                os.killpg(self.proc.pid, sig)
+            except ProcessLookupError:
+                break
+            try:
+                self.proc.wait(15)
+                break
+            except subprocess.TimeoutExpired:
+                continue
+        try:
+            os.killpg(self.proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        self.log.close()
+
+
+# ---------------------------------------------------------------------------- one session
+async def session(browser, url: str, moves: int, timeout_s: float, index: int, stagger_s: float) -> dict:
+    await asyncio.sleep(index * stagger_s)
+    out = {"latencies_s": [], "run_first_s": None, "load_s": None, "errors": []}
+    ctx = await browser.new_context(viewport={"width": 1400, "height": 1000})
+    page = await ctx.new_page()
+    page.on("pageerror", lambda e: out["errors"].append(f"page error: {e}"))
+    page.on("console", lambda m: m.type == "error" and out["errors"].append(f"console: {m.text[:200]}"))
+    page.on("websocket", lambda ws: ws.on("close", lambda _ws: out.setdefault("ws_closed", True)))
+    await page.add_init_script(_INIT_JS)
+    try:
+        t0 = time.monotonic()
+        await page.goto(url, timeout=timeout_s * 1000)
+        await page.wait_for_selector(".amra-run button", timeout=timeout_s * 1000)
+        out["load_s"] = time.monotonic() - t0
+        t_click = await page.evaluate("() => performance.now()")
+        await page.click(".amra-run button")
+        first = await page.evaluate(_WAIT_FIRST_JS, [t_click, timeout_s * 1000])
+        if first < 0:
+            out["errors"].append("no streamed point after Run")
+            return out
+        out["run_first_s"] = first / 1000
+        handle = page.locator(".amra-gj-slider .noUi-handle").first
+        for k in range(moves):
+            await page.wait_for_timeout(800)
+            last = await page.evaluate("() => window.__amraLast()")
+            await handle.scroll_into_view_if_needed()
+            box = await handle.bounding_box()
+            x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+            dx = 25 if k % 2 == 0 else -40
+            await page.mouse.move(x, y)
+            await page.mouse.down()
+            await page.mouse.move(x + dx, y, steps=4)
+            await page.mouse.up()
+            lat = await page.evaluate(_WAIT_NEW_GJ_JS, [last["gj"], timeout_s * 1000])
+            if lat < 0:
+                out["errors"].append(f"move {k}: no point with the new GJ within {timeout_s:.0f} s")
+            else:
+                out["latencies_s"].append(lat / 1000)
+        alert = page.locator(".alert-danger")
+        if await alert.count() and await alert.first.is_visible():
+            out["errors"].append(f"alert: {(await alert.first.inner_text())[:200]}")
+    except Exception as exc:  # noqa: BLE001 - a timeout or a crashed page is an error of the session
+        out["errors"].append(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
+    finally:
+        if out.pop("ws_closed", False):
+            out["errors"].append("websocket closed during the session")
+        out["page"] = page
+        out["ctx"] = ctx
+    return out
+
+
+def _pct(xs, q):
+    if not xs:
+        return None
+    xs = sorted(xs)
+    k = (len(xs) - 1) * q
+    lo, hi = int(k), min(int(k) + 1, len(xs) - 1)
+    return xs[lo] + (xs[hi] - xs[lo]) * (k - lo)
+
+
+async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None, run_s: float = 60.0,
+                    stagger_s: float = 0.25, launch=None) -> dict:
+    from playwright.async_api import async_playwright
+    launch = launch or {"executable_path": CHROMIUM, "args": CHROMIUM_ARGS, "headless": True}
+    rss0 = server.rss_mb() if server else None
+    main0 = server.main_rss_mb() if server else None
+    peak = [rss0 or 0.0]
+    peak_main = [main0 or 0.0]
+    stop = asyncio.Event()
+
+    async def sample():
+        while not stop.is_set():
+            if server:
+                peak[0] = max(peak[0], server.rss_mb())
+                peak_main[0] = max(peak_main[0], server.main_rss_mb())
+            await asyncio.sleep(0.5)
+
+    async with async_playwright() as p:
+        browser = await p.chromium.launch(**launch)
+        sampler = asyncio.create_task(sample())
+        t0 = time.monotonic()
+        sep = "&" if "?" in url else "?"
+        results = await asyncio.gather(*[session(browser, f"{url}{sep}run_s={run_s:g}", moves, timeout_s, i,
+                                                 stagger_s) for i in range(n)])
+        wall = time.monotonic() - t0
+        rss_open = server.rss_mb() if server else None
+        for r in results:
+            try:
+                await r.pop("ctx").close()
+            except Exception:  # noqa: BLE001
+                pass
+            r.pop("page", None)
+        stop.set()
+        await sampler
+        await browser.close()
+    lat = [x for r in results for x in r["latencies_s"]]
+    firsts = [r["run_first_s"] for r in results if r["run_first_s"] is not None]
+    errors = [e for r in results for e in r["errors"]]
+    out = {"sessions": n, "moves": len(lat), "p50_s": _pct(lat, 0.5), "p95_s": _pct(lat, 0.95),
+           "max_s": max(lat) if lat else None, "run_first_p50_s": _pct(firsts, 0.5),
+           "run_first_p95_s": _pct(firsts, 0.95), "errors": len(errors), "error_samples": errors[:5],
+           "wall_s": round(wall, 1)}
+    if server:
+        out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
+                    "rss_sessions_open_mb": round(rss_open, 1),
+                    "server_rss_base_mb": round(main0, 1), "server_rss_peak_mb": round(peak_main[0], 1),
+                    "mb_per_session": round((peak_main[0] - main0) / n, 1)})
+    return out
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sessions", type=int, nargs="+", default=[1, 8, 16, 32])
+    ap.add_argument("--moves", type=int, default=3, help="GJ slider moves per session")
+    ap.add_argument("--run-s", type=float, default=120.0, help="simulated run length per session [s]")
+    ap.add_argument("--timeout", type=float, default=60.0, help="per-step timeout [s]")
+    ap.add_argument("--stagger", type=float, default=0.25, help="delay between session starts [s]")
+    ap.add_argument("--url", help="an already running dashboard (.../main); default: start amra serve")
+    ap.add_argument("--serve-arg", action="append", default=[], help="extra amra serve argument (repeatable)")
+    ap.add_argument("--json", help="write the results here")
+    a = ap.parse_args(argv)
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # so the server below is stopped too
+    results = []
+    for n in a.sessions:
+        server = None if a.url else Server(args=a.serve_arg)
+        try:
+            r = asyncio.run(run_level(n, a.url or server.url, a.moves, a.timeout, server, a.run_s, a.stagger))
+        finally:
+            if server:
+                server.stop()
+        results.append(r)
+        print(json.dumps(r), flush=True)
+    if a.json:
+        Path(a.json).write_text(json.dumps(results, indent=2))
+    return 0 if all(r["errors"] == 0 for r in results) else 1
+
+
+def first_stream_seconds(url: str, launch=None, timeout_s: float = 120.0) -> float:
+    """Open ``url`` in headless Chromium, click Run, return seconds to the first streamed point
+    (raises if none arrives); used by the image test."""
+    async def go():
+        from playwright.async_api import async_playwright
+        async with async_playwright() as p:
+            browser = await p.chromium.launch(**(launch or {"executable_path": CHROMIUM, "args": CHROMIUM_ARGS}))
+            r = await session(browser, url, 0, timeout_s, 0, 0.0)
+            await r.pop("ctx").close()
+            await browser.close()
+            return r
+    r = asyncio.run(go())
+    if r["run_first_s"] is None or r["errors"]:
+        raise AssertionError(f"no streaming session: {r['errors']}")
+    return r["run_first_s"]
+
+
+if __name__ == "__main__":
+    sys.exit(main())
