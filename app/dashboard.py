@@ -281,7 +281,12 @@ class Dashboard(pn.viewable.Viewer):
     def start_periodic(self) -> None:
         from .server_limits import stream_period_ms
         self._period_s = stream_period_ms(PUMP_MS) / 1000.0
-        self._periodic = pn.state.add_periodic_callback(self.tick, period=stream_period_ms(PUMP_MS))
+        from panel.io.callbacks import PeriodicCallback
+        # background: a periodic pump must not flag the page busy (the busy indicator would send
+        # two extra messages per tick and the page would look permanently loading)
+        self._periodic = PeriodicCallback(callback=self.tick, period=stream_period_ms(PUMP_MS), background=True,
+                                          log=False)
+        self._periodic.start()
 
     def close(self, *args) -> None:
         if self._closed:
