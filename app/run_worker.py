@@ -135,13 +135,14 @@ class RunWorker:
         post("finished", {"run_id": run_id, "status": sim.status, "history": sim.history, "stopped": stop.is_set(),
                           "t_s": sim.t})
         post("status", {"run_id": run_id, "state": "idle",
-                        "text": f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s ({sim.status})"})
+                        "text": f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s ({_status(sim)})"})
 
     def _post_views(self, sim: Simulation, run_id: int, final: bool) -> None:
         try:
             with np.errstate(all="ignore"):
                 v = sim.verdict()
-            self._post("verdict", {"run_id": run_id, "verdict": v, "final": final, "status": sim.status,
+            self._post("verdict", {"run_id": run_id, "verdict": v, "final": final,
+                                   "status": _status(sim) if final else sim.status,
                                    "start_note": sim.start_note})
         except Exception as exc:  # noqa: BLE001 - too short a run to judge
             if final:
@@ -159,3 +160,8 @@ def _decimate(rows: np.ndarray, n_max: int) -> np.ndarray:
         return rows
     idx = np.linspace(0, len(rows) - 1, n_max).round().astype(int)
     return rows[idx]
+
+
+def _status(sim: Simulation) -> str:
+    """The solver status for the page: a run that reached its length is 'completed', not 'running'."""
+    return "completed" if sim.status == "running" else sim.status
