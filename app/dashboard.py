@@ -9,6 +9,7 @@ map subscription (:meth:`Dashboard.close`).
 from __future__ import annotations
 
 import queue
+import time
 from typing import Optional
 
 import numpy as np
@@ -64,6 +65,8 @@ class Dashboard(pn.viewable.Viewer):
         self.run_status = pn.pane.Markdown("**Run:** idle", name="run-status")
         self.live_note = pn.pane.Markdown("", name="live-note")
         self._ticks = 0
+        self._next_pump = 0.0
+        self._period_s = PUMP_MS / 1000.0
         self._locus_key = None
         self._periodic = None
         self._closed = False
@@ -188,6 +191,17 @@ class Dashboard(pn.viewable.Viewer):
                 self.notify(f"no map for this case: {exc}")
 
     # ------------------------------------------------------------------ the pump (event loop)
+    def tick(self) -> None:
+        """The periodic callback: pump, but leave the event loop at least half of its time for
+        user input (a slider release must not queue behind plot updates on a loaded server)."""
+        now = time.perf_counter()
+        if now < self._next_pump:
+            return
+        self.pump()
+        spent = time.perf_counter() - now
+        # idle for as long as the pump took (capped, so a slow update cannot starve the stream)
+        self._next_pump = now + min(0.25, max(0.0, 2.0 * spent - self._period_s))
+
     def pump(self) -> int:
         """Drain the outbox and update the page; returns the number of rows streamed."""
         frames = []
@@ -266,7 +280,13 @@ class Dashboard(pn.viewable.Viewer):
     # ------------------------------------------------------------------ lifecycle
     def start_periodic(self) -> None:
         from .server_limits import stream_period_ms
-        self._periodic = pn.state.add_periodic_callback(self.pump, period=stream_period_ms(PUMP_MS))
+        self._period_s = stream_period_ms(PUMP_MS) / 1000.0
+        from panel.io.callbacks import PeriodicCallback
+        # background: a periodic pump must not flag the page busy (the busy indicator would send
+        # two extra messages per tick and the page would look permanently loading)
+        self._periodic = PeriodicCallback(callback=self.tick, period=stream_period_ms(PUMP_MS), background=True,
+                                          log=False)
+        self._periodic.start()
 
     def close(self, *args) -> None:
         if self._closed:

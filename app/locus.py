@@ -1,13 +1,14 @@
 """Modes along GJ for the current CG: the source of the root locus.
 
-The contract is ``amra_core.column.walk_column`` (trim continuation down a CG column with the modes
-at each step; being built on the maps branch). Until that module is in main, :func:`walk` samples
-``amra_core.stability.analyse`` at a handful of log-spaced GJ values. Switching is one line in
-:func:`walk`. Both return :class:`LocusPoint` lists, so the view does not change.
+The source is ``amra_core.column.walk_column`` (trim continuation down a CG column with the modes
+at each step, the fold and flutter crossings bracketed). Where that module is missing (older core),
+:func:`walk` samples ``amra_core.stability.analyse`` at a handful of log-spaced GJ values. Both
+return :class:`LocusPoint` lists, so the view does not change.
 """
 from __future__ import annotations
 
 import importlib.util
+import math
 import threading
 from dataclasses import dataclass
 from typing import Optional
@@ -20,6 +21,7 @@ from amra_core.rotor import Rotor
 from amra_core.stability import analyse
 
 N_SAMPLES = 9
+LOCUS_REL_TOL = 0.05  #: bracket of the fold and of flutter crossings along the locus [-]
 
 
 @dataclass(frozen=True)
@@ -60,10 +62,11 @@ def _walk_with_analyse(rotor, flight, settings, cg, gj_min, gj_max, cancel, n=N_
 
 def _walk_with_column(rotor, flight, settings, cg, gj_min, gj_max, cancel) -> list:
     from amra_core.column import walk_column
-    cw = walk_column(rotor, flight, settings, cg, gj_min, gj_max, cancel=cancel)
+    cw = walk_column(rotor, flight, settings, cg, gj_min, gj_max, rel_tol=LOCUS_REL_TOL, cancel=cancel)
     out = []
     for p in cw.points:
-        modes = _physical(p.modes or ())
-        trimmed = p.trim is not None and getattr(p.trim, "ok", True)
-        out.append(LocusPoint(float(p.gj_nm2), bool(trimmed), modes, p.max_real_part_per_s, bool(p.stable)))
+        trimmed = p.branch == "normal" and p.trim is not None
+        modes = _physical(p.modes or ()) if trimmed else ()
+        re = p.max_real_part_per_s if trimmed and math.isfinite(p.max_real_part_per_s) else None
+        out.append(LocusPoint(float(p.gj_nm2), trimmed, modes, re, bool(p.stable)))
     return out

@@ -24,7 +24,8 @@ import numpy as np
 from amra_core.simulation import Case, Simulation
 
 TICK_S = 0.05  #: wall-clock period of a chunk [s]: 20 chunks per second
-MAX_ROWS_PER_CHUNK = 40  #: rows posted per chunk (decimated; the full history is kept by the Simulation)
+MAX_ROWS_PER_CHUNK = 40  #: rows posted per chunk at most (the full history is kept by the Simulation)
+STREAM_RATE_HZ = 200.0  #: rows posted per simulated second (>= 7 per period of a 28 Hz torsion mode)
 DISC_PERIOD_S = 1.0  #: wall-clock period of the disc and verdict updates during a run [s]
 
 
@@ -115,7 +116,8 @@ class RunWorker:
                         post("error", {"run_id": run_id, "text": f"could not apply {pend} mid-run: {exc}"})
                 with np.errstate(all="ignore"):
                     rows = sim.advance(span_s=min(speed * self.tick_s, t_end - sim.t))
-                post("rows", {"run_id": run_id, "rows": _decimate(rows, MAX_ROWS_PER_CHUNK), "gj_nm2": gj,
+                n_keep = min(MAX_ROWS_PER_CHUNK, max(2, int(round(STREAM_RATE_HZ * speed * self.tick_s))))
+                post("rows", {"run_id": run_id, "rows": _decimate(rows, n_keep), "gj_nm2": gj,
                               "t_s": sim.t})
                 now = time.perf_counter()
                 if now - last_disc >= DISC_PERIOD_S:
@@ -133,13 +135,14 @@ class RunWorker:
         post("finished", {"run_id": run_id, "status": sim.status, "history": sim.history, "stopped": stop.is_set(),
                           "t_s": sim.t})
         post("status", {"run_id": run_id, "state": "idle",
-                        "text": f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s ({sim.status})"})
+                        "text": f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s ({_status(sim)})"})
 
     def _post_views(self, sim: Simulation, run_id: int, final: bool) -> None:
         try:
             with np.errstate(all="ignore"):
                 v = sim.verdict()
-            self._post("verdict", {"run_id": run_id, "verdict": v, "final": final, "status": sim.status,
+            self._post("verdict", {"run_id": run_id, "verdict": v, "final": final,
+                                   "status": _status(sim) if final else sim.status,
                                    "start_note": sim.start_note})
         except Exception as exc:  # noqa: BLE001 - too short a run to judge
             if final:
@@ -157,3 +160,8 @@ def _decimate(rows: np.ndarray, n_max: int) -> np.ndarray:
         return rows
     idx = np.linspace(0, len(rows) - 1, n_max).round().astype(int)
     return rows[idx]
+
+
+def _status(sim: Simulation) -> str:
+    """The solver status for the page: a run that reached its length is 'completed', not 'running'."""
+    return "completed" if sim.status == "running" else sim.status

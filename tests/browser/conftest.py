@@ -83,10 +83,14 @@ def dashboard_server(tmp_path_factory):
     from app.main import create_app
     from app.map_jobs import get_registry
     from app.settings import ServerSettings
+    from app.analysis import warm_worker
+    from app.background import get_analysis_pool
     from app.warmup import warm
 
     warm()
     registry = get_registry(ServerSettings.from_env())
+    pool = get_analysis_pool()
+    pool.submit(warm_worker).result(timeout=300)
     sessions = []
 
     def app():
@@ -106,7 +110,9 @@ def dashboard_server(tmp_path_factory):
         server.stop()
         server.join(timeout=30)
         registry.close()
+        pool.close()
         pn.state.cache.pop("amra-map-registry", None)
+        pn.state.cache.pop("amra-analysis-pool", None)
         if old is None:
             os.environ.pop("AMRA_STORE", None)
         else:

@@ -43,10 +43,15 @@ def wait_for(predicate, timeout_s: float = 30.0, every_s: float = 0.1, what: str
 
 
 def open_dashboard(page, url: str, timeout_ms: int = 60_000) -> float:
-    """Open the page and wait until the controls are rendered; returns the time taken [s]."""
+    """Open the page and wait until the controls and plots are rendered; returns the time taken [s]."""
     t0 = time.monotonic()
     page.goto(url)
     page.wait_for_selector(".amra-run button", timeout=timeout_ms)
+    # the plots are rendered after the first paint (defer_load); a user presses Run once they show
+    wait_for(lambda: plot_point(page, "Rotor speed", 0.0, 0.0) is not None
+             and plot_point(page, "Stability boundary map", 30.0, 100.0) is not None,
+             timeout_ms / 1000, every_s=0.25, what="the plots to render")
+    page.wait_for_timeout(500)
     return time.monotonic() - t0
 
 

@@ -36,12 +36,19 @@ def test_page_loads_offline_without_console_errors(watched_page, dashboard_url):
 
 def test_a_run_streams_points_into_the_plots(watched_page, dashboard_url):
     page = watched_page
-    open_dashboard(page, dashboard_url + "?run_s=4&speed=2")
+    open_dashboard(page, dashboard_url + "?run_s=4&speed=1")
     page.locator(".amra-run button").click()
-    first = wait_for(lambda: streamed(page)[0] > 0 and streamed(page), 60, what="the first streamed points")
-    later = wait_for(lambda: streamed(page)[1] and streamed(page)[1] > first[1] + 0.5 and streamed(page), 30,
-                     what="more points")
-    assert later[0] > first[0]
+    seen = set()
+
+    def finished():
+        rows, t, _ = streamed(page)
+        if rows:
+            seen.add(rows)
+        return t is not None and t > 3.99
+    wait_for(finished, 90, every_s=0.05, what="the whole run in the plots")
+    assert len(seen) >= 3, f"points arrived in {len(seen)} update(s), not streamed"  # several partial states
+    rows, t, gj = streamed(page)
+    assert 700 <= rows <= 900 and gj == 1500  # 200 rows per simulated second
     expect(page.locator(".amra-verdict[data-final='true']")).to_be_visible(timeout=30_000)
     shot(page, "02-run-streamed")
     assert page.amra_errors == []
@@ -54,15 +61,22 @@ def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_se
     before = wait_for(lambda: streamed(page)[1] and streamed(page)[1] > 0.5 and streamed(page), 60,
                       what="0.5 s of run")
     assert before[2] == 1500
-    handle = page.locator(".amra-gj-slider .noUi-handle").first
-    box = handle.bounding_box()
-    page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
-    page.mouse.down()
-    page.mouse.move(box["x"] - 60, box["y"] + box["height"] / 2, steps=5)
-    page.mouse.up()
-    after = wait_for(lambda: streamed(page)[2] != 1500 and streamed(page), 30, what="points with the new GJ")
-    assert after[2] < 1500 and after[1] > before[1]  # the same run continued with a softer blade
     d = _session(dashboard_server)
+    handle = page.locator(".amra-gj-slider .noUi-handle").first
+    for attempt in range(3):  # a drag can be lost while a loaded browser is busy drawing
+        box = handle.bounding_box()
+        page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+        page.mouse.down()
+        page.mouse.move(box["x"] - 60, box["y"] + box["height"] / 2, steps=5)
+        page.mouse.up()
+        try:
+            wait_for(lambda: d.controls.gj_nm2 < 1500, 15, what="the slider release to reach the server")
+            break
+        except AssertionError:
+            if attempt == 2:
+                raise
+    after = wait_for(lambda: streamed(page)[2] != 1500 and streamed(page), 60, what="points with the new GJ")
+    assert after[2] < 1500 and after[1] > before[1]  # the same run continued with a softer blade
     assert d.controls.gj_nm2 == after[2] and d.worker.running
     expect(page.get_by_text("applied live at t =").first).to_be_visible(timeout=10_000)
     shot(page, "03-gj-changed-mid-run")
