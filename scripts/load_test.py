@@ -174,6 +174,7 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
     page = await ctx.new_page()
     page.on("pageerror", lambda e: out["errors"].append(f"page error: {e}"))
     page.on("console", lambda m: m.type == "error" and out["errors"].append(f"console: {m.text[:200]}"))
+    page.on("requestfailed", lambda r: out["errors"].append(f"request failed: {r.url[:120]} ({r.failure})"))
     page.on("websocket", lambda ws: ws.on("close", lambda _ws: out.setdefault("ws_closed", True)))
     await page.add_init_script(_INIT_JS)
     try:
