@@ -238,6 +238,12 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
         env["AMRA_DASK_SCHEDULER"] = s["dask_scheduler"]
     else:
         env.pop("AMRA_DASK_SCHEDULER", None)
+    # Page resources (JS, CSS) from this server, never a CDN: the server may be offline, and with
+    # concurrent sessions Panel's temporary resource mode (panel.io.resources.set_resource_mode,
+    # a process-wide setting) races between threads and falls back to Bokeh's default, the CDN,
+    # unless the mode is also set in the environment (measured: every page of 8 concurrent
+    # sessions fetched cdn.holoviz.org without it)
+    env.setdefault("BOKEH_RESOURCES", "server")
     # Numba: only a thread-safe layer (OpenMP from libgomp1, or TBB) when threads share kernels
     env.setdefault("NUMBA_THREADING_LAYER", "safe")
     return argv, env
@@ -261,7 +267,7 @@ def cmd_serve(args):
     argv, env = build_command(s, os.environ)
     if args.print_command:
         print(json.dumps({"argv": argv, "env": {k: v for k, v in env.items()
-                                                if k.startswith(("AMRA_", "NUMBA_"))}}, indent=2))
+                                                if k.startswith(("AMRA_", "NUMBA_", "BOKEH_"))}}, indent=2))
         return 0
     if "*" in s["origins"]:
         print("amra serve: warning: websocket origin '*' accepts pages from any site", file=sys.stderr)

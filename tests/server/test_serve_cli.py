@@ -45,6 +45,7 @@ def test_defaults_no_wildcard_origin(capsys, monkeypatch):
     assert flag_values(argv, "--address") == ["127.0.0.1"] and flag_values(argv, "--port") == ["5006"]
     assert cmd["env"]["AMRA_STORE"].endswith("amra-store.sqlite")
     assert float(cmd["env"]["AMRA_MAX_RUN_S"]) == 120.0
+    assert cmd["env"]["BOKEH_RESOURCES"] == "server"  # no CDN (offline servers; Panel's resource-mode race)
 
 
 def test_environment_sets_everything(capsys, monkeypatch, tmp_path):
