@@ -11,7 +11,7 @@ flag                           variable                          default
 ``--address``                  ``AMRA_ADDRESS``                  127.0.0.1
 ``--store FILE``               ``AMRA_STORE``                    ``$XDG_DATA_HOME/amra/amra-store.sqlite``
 ``--num-procs N``              ``AMRA_NUM_PROCS``                1 (0: one per core)
-``--num-threads N``            ``AMRA_NUM_THREADS``              0 (Panel: min(32, cores + 4))
+``--num-threads N``            ``AMRA_NUM_THREADS``              none (callbacks on the event loop)
 ``--allow-websocket-origin``   ``AMRA_ALLOW_WEBSOCKET_ORIGIN``   address:port, localhost:port, 127.0.0.1:port
 ``--liveness/--no-liveness``   ``AMRA_LIVENESS`` (1/0)           on (``/liveness``)
 ``--prefix P``                 ``AMRA_PREFIX``                   none
@@ -139,7 +139,10 @@ _SPECS = {
     "address": ("--address", "AMRA_ADDRESS", lambda n, t: str(t).strip() or "127.0.0.1", "127.0.0.1"),
     "store": ("--store", "AMRA_STORE", lambda n, t: str(Path(t).expanduser()), None),
     "num_procs": ("--num-procs", "AMRA_NUM_PROCS", lambda n, t: _int(n, t, 0, 64), 1),
-    "num_threads": ("--num-threads", "AMRA_NUM_THREADS", lambda n, t: _int(n, t, 0, 256), 0),
+    # default: no thread pool, sessions built and callbacks run on the event loop one at a time (Panel's
+    # process-wide resource mode is switched while a page renders: built in parallel threads, pages
+    # of concurrent sessions referenced cdn.holoviz.org); the solver runs in its own threads anyway
+    "num_threads": ("--num-threads", "AMRA_NUM_THREADS", lambda n, t: _int(n, t, 0, 256), None),
     "origins": ("--allow-websocket-origin", "AMRA_ALLOW_WEBSOCKET_ORIGIN", _origins, None),
     "liveness": ("--liveness", "AMRA_LIVENESS", _bool, True),
     "prefix": ("--prefix", "AMRA_PREFIX", _prefix, ""),
@@ -202,8 +205,10 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
     """``(argv, env)`` of the ``panel serve`` process for the settings ``s``."""
     main, setup = APP_DIR / "main.py", APP_DIR / "warmup.py"
     argv = [python, "-m", "panel", "serve", str(main), "--address", s["address"], "--port", str(s["port"]),
-            "--num-procs", str(s["num_procs"]), "--num-threads", str(s["num_threads"]),
+            "--num-procs", str(s["num_procs"]),
             "--websocket-max-message-size", str(s["max_message_bytes"]), "--log-level", s["log_level"]]
+    if s["num_threads"] is not None:
+        argv += ["--num-threads", str(s["num_threads"])]
     if setup.is_file():
         argv += ["--setup", str(setup)]
     for origin in s["origins"]:
@@ -291,7 +296,8 @@ def register(sub) -> None:
     p.add_argument("--store", metavar="FILE", help="SQLite result store (AMRA_STORE)")
     p.add_argument("--num-procs", metavar="N", help="server processes, 0 = one per core (AMRA_NUM_PROCS; default 1)")
     p.add_argument("--num-threads", metavar="N",
-                   help="callback threads per process, 0 = Panel's default (AMRA_NUM_THREADS; default 0)")
+                   help="callback threads per process, 0 = Panel's pool of min(32, cores + 4) (AMRA_NUM_THREADS; "
+                        "default: none, callbacks on the event loop)")
     p.add_argument("--allow-websocket-origin", dest="origins", action="append", metavar="HOST[:PORT]",
                    help="page origin allowed to connect, repeatable (AMRA_ALLOW_WEBSOCKET_ORIGIN)")
     p.add_argument("--liveness", dest="liveness", action="store_true", default=None,
