@@ -3,7 +3,9 @@
 # packages with apt-get as root: chromium for the browser tests, buildah and debootstrap for the
 # image tests), create/reuse .venv with AMRA and its test extras, then run the whole suite:
 #   1. the core tests under NUMBA_BOUNDSCHECK=1 (own Numba cache): an out-of-bounds access in a
-#      kernel raises IndexError instead of silently corrupting the heap;
+#      kernel raises IndexError instead of silently corrupting the heap. The tests marked slow are
+#      long end-to-end runs through the same kernel paths (maps, validation report, 10 s runs);
+#      bounds-checked kernels run them several times slower, so this pass leaves them to step 2;
 #   2. every test (core, app, browser, slow) with the normal compiled kernels.
 # Extra arguments go to both pytest runs, e.g. `bash scripts/test.sh -k trim`.
 # AMRA_SKIP_BOUNDSCHECK=1 skips step 1 (local iterations only; CI runs both).
@@ -33,7 +35,7 @@ run_pytest() {  # exit code 5 (no tests collected) counts as a failure
 if [[ -z "${AMRA_SKIP_BOUNDSCHECK:-}" ]]; then
     echo "test.sh: core tests under NUMBA_BOUNDSCHECK=1 ..."
     NUMBA_BOUNDSCHECK=1 NUMBA_CACHE_DIR="${AMRA_BC_CACHE:-$HOME/.cache/amra-numba-boundscheck}" \
-        run_pytest -q tests/core "$@"
+        run_pytest -q -m "not slow" tests/core "$@"
 fi
 echo "test.sh: the whole suite ..."
 run_pytest -ra "$@"
