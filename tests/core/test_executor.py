@@ -180,8 +180,6 @@ def test_dask_over_tls(tmp_path, monkeypatch, capsys):
                                   security=sec, host="127.0.0.1", dashboard_address=None) as cluster:
         addr = cluster.scheduler_address
         assert addr.startswith("tls://")
-        with pytest.raises(ValueError, match="cannot connect"):  # no certificates: refused
-            DaskExecutor(addr, timeout_s=3)
         monkeypatch.setenv("AMRA_DASK_TLS_CA", ca)
         monkeypatch.setenv("AMRA_DASK_TLS_CERT", cert)
         monkeypatch.setenv("AMRA_DASK_TLS_KEY", key)
@@ -192,6 +190,12 @@ def test_dask_over_tls(tmp_path, monkeypatch, capsys):
         out, err = capsys.readouterr()
         assert rc == 0, err
         assert json.loads(out)["executor"].startswith("dask (tls://")
+        # last: a refused client can leave distributed's loop runner for this in-process cluster in a
+        # state where the next client of the same cluster fails to start (seen under load)
+        for name in ("AMRA_DASK_TLS_CA", "AMRA_DASK_TLS_CERT", "AMRA_DASK_TLS_KEY"):
+            monkeypatch.delenv(name)
+        with pytest.raises(ValueError, match="cannot connect"):  # no certificates: refused
+            DaskExecutor(addr, timeout_s=3)
 
 
 @pytest.mark.parametrize("addr, why", [("http://host:8786", "must start with"), ("", "scheduler")])
