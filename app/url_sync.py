@@ -26,6 +26,8 @@ def _coerce(p: param.Parameter, name: str, raw):
         if isinstance(raw, float) and raw.is_integer():
             raw = int(raw)
         if isinstance(raw, str):
+            if not raw.strip().lstrip("+-").isascii() or not raw.strip().lstrip("+-").isdigit():
+                raise ValueError(f"{name} = {raw!r} is not allowed: must be an integer")
             raw = int(raw)
     elif isinstance(p, param.Number):
         if isinstance(raw, str):
@@ -78,7 +80,12 @@ def session_query() -> dict:
     args = pn.state.session_args or {}
     flat = {k: (v[-1].decode("utf-8", "replace") if isinstance(v[-1], bytes) else str(v[-1]))
             for k, v in args.items() if v}
-    return parse_query("?" + urllib.parse.urlencode(flat))
+    try:
+        return parse_query("?" + urllib.parse.urlencode(flat))
+    except ValueError:
+        # Panel's parser takes str.isdigit() for "an integer", so '²' reaches int() and raises; the
+        # raw strings are coerced (or rejected with a message) per control by apply_query instead
+        return flat
 
 
 def apply_session_query(controls: param.Parameterized, notify) -> None:

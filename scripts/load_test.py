@@ -307,6 +307,25 @@ def main(argv=None) -> int:
     return 0 if all(r["errors"] == 0 for r in results) else 1
 
 
+def run_async(coro):
+    """``asyncio.run(coro)`` in a thread of its own, so it also works where an event loop is already
+    running in the calling thread (a pytest session whose sync Playwright tests left one there)."""
+    import threading
+    out = {}
+
+    def target():
+        try:
+            out["value"] = asyncio.run(coro)
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the caller's thread
+            out["error"] = exc
+    t = threading.Thread(target=target, name="amra-load-async")
+    t.start()
+    t.join()
+    if "error" in out:
+        raise out["error"]
+    return out["value"]
+
+
 def first_stream_seconds(url: str, launch=None, timeout_s: float = 120.0) -> float:
     """Open ``url`` in headless Chromium, click Run, return seconds to the first streamed point
     (raises if none arrives); used by the image test."""
@@ -318,7 +337,7 @@ def first_stream_seconds(url: str, launch=None, timeout_s: float = 120.0) -> flo
             await r.pop("ctx").close()
             await browser.close()
             return r
-    r = asyncio.run(go())
+    r = run_async(go())
     if r["run_first_s"] is None or r["errors"]:
         raise AssertionError(f"no streaming session: {r['errors']}")
     return r["run_first_s"]

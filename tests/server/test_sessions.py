@@ -22,6 +22,9 @@ pytestmark = pytest.mark.slow
 sys.path.insert(0, str(REPO / "scripts"))
 import load_test  # noqa: E402
 
+run_async = load_test.run_async
+
+
 SMALL_MAP = "map_columns=2&map_coarse=3"
 
 
@@ -100,7 +103,7 @@ def test_store_on_read_only_disk_page_says_so_and_runs_work(amra_server, chromiu
             text = await _wait_map(page, r"not kept", 90, where=lambda pg: _text(pg, r"not kept"))
             first = await _run_streams(page)
             return text, first
-        (text, first), errors = asyncio.run(_with_page(f"{base}/main?{SMALL_MAP}", check, chromium_args))
+        (text, first), errors = run_async(_with_page(f"{base}/main?{SMALL_MAP}", check, chromium_args))
         assert "not kept" in text
         assert first > 0 and not errors
     finally:
@@ -120,7 +123,7 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
             while not _stored_columns(store) and time.monotonic() < deadline:
                 await page.wait_for_timeout(200)
             srv.kill(signal.SIGKILL)  # mid-map, no clean shutdown
-        asyncio.run(_with_page(f"http://127.0.0.1:{port}/{url_q}", until_a_column, chromium_args))
+        run_async(_with_page(f"http://127.0.0.1:{port}/{url_q}", until_a_column, chromium_args))
         srv.proc.wait(10)
     finally:
         srv.stop()
@@ -131,7 +134,7 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
     try:
         async def until_complete(page):
             return await _wait_map(page, r"complete", 600)
-        text, errors = asyncio.run(_with_page(f"http://127.0.0.1:{port2}/{url_q}", until_complete, chromium_args))
+        text, errors = run_async(_with_page(f"http://127.0.0.1:{port2}/{url_q}", until_complete, chromium_args))
     finally:
         srv2.stop()
     m = re.search(r"(\d+) cells \((\d+) from the store\)", text)
@@ -184,10 +187,10 @@ def test_fifty_sessions_opened_and_closed_mid_run(amra_server, chromium_args):
         return _threads(pid)
 
     threads0 = _threads(pid)
-    asyncio.run(cycle(5))  # warm: first sessions load modules, caches, the map registry
+    run_async(cycle(5))  # warm: first sessions load modules, caches, the map registry
     threads_warm = settle(threads0 + 8)
     rss_warm = load_test.tree_rss_mb(pid)
-    firsts = asyncio.run(cycle(50))
+    firsts = run_async(cycle(50))
     threads_end = settle(threads_warm)
     rss_end = load_test.tree_rss_mb(pid)
     streamed = [f for f in firsts if f > 0]
@@ -206,7 +209,7 @@ def test_map_through_a_dask_cluster_beside_the_server(amra_server, chromium_args
 
         async def until_complete(page):
             return await _wait_map(page, r"complete", 600)
-        text, errors = asyncio.run(_with_page(f"{base}/main?{SMALL_MAP}", until_complete, chromium_args))
+        text, errors = run_async(_with_page(f"{base}/main?{SMALL_MAP}", until_complete, chromium_args))
         # the scheduler's record of what ran: compute seconds per task prefix (function name)
         ran = client.run_on_scheduler(lambda dask_scheduler: {
             k: dict(v.all_durations) for k, v in dask_scheduler.task_prefixes.items()})
