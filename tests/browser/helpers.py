@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 # all ColumnDataSources whose data has the streamed columns: [n rows, last t, last gj]
 JS_STREAM = """
@@ -110,3 +111,14 @@ def progress_value(page, name: str = "map-progress"):
       const p = find(document);
       return p ? Number(p.getAttribute('value') ?? p.value) : null;
     }""")
+
+
+SCREENSHOTS = Path(__file__).resolve().parents[2] / "test-results" / "screenshots"
+
+
+def shot(page, name: str) -> Path:
+    """Save a full-page screenshot as a test artifact (test-results/screenshots/NAME.png)."""
+    SCREENSHOTS.mkdir(parents=True, exist_ok=True)
+    path = SCREENSHOTS / f"{name}.png"
+    page.screenshot(path=str(path), full_page=True)
+    return path

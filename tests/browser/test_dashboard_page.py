@@ -10,8 +10,7 @@ import pytest
 from playwright.sync_api import expect
 
 from app.layout import TITLE
-from conftest import shot
-from helpers import map_cells, open_dashboard, plot_point, progress_value, streamed, wait_for
+from helpers import map_cells, open_dashboard, plot_point, progress_value, shot, streamed, wait_for
 
 pytestmark = pytest.mark.browser
 UNSTABLE = ("flutter", "divergence", "overspeed", "no-autorotation")
