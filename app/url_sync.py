@@ -73,19 +73,30 @@ def query_string(controls: param.Parameterized) -> str:
     return urllib.parse.urlencode({key: getattr(controls, name) for name, key in URL_KEYS.items()})
 
 
-def session_query() -> dict:
-    """The query of the session's request, parsed as ``Location.query_params`` parses it."""
-    import panel as pn
+def parse_link_query(query: str) -> dict:
+    """A URL query string (with or without the leading '?') parsed as ``Location.query_params``
+    parses it, or, where Panel's parser raises, as plain strings.
+
+    Panel's parser takes ``str.isdigit()`` for "an integer", so a value like '²' reaches ``int()``
+    and raises; the raw strings are then coerced (or rejected with a message) per control by
+    :func:`apply_query`."""
     from panel.util import parse_query
+    query = query.lstrip("?")
+    if not query:
+        return {}
+    try:
+        return parse_query("?" + query)
+    except ValueError:
+        return dict(urllib.parse.parse_qsl(query, keep_blank_values=True))
+
+
+def session_query() -> dict:
+    """The query of the session's request, parsed by :func:`parse_link_query`."""
+    import panel as pn
     args = pn.state.session_args or {}
     flat = {k: (v[-1].decode("utf-8", "replace") if isinstance(v[-1], bytes) else str(v[-1]))
             for k, v in args.items() if v}
-    try:
-        return parse_query("?" + urllib.parse.urlencode(flat))
-    except ValueError:
-        # Panel's parser takes str.isdigit() for "an integer", so '²' reaches int() and raises; the
-        # raw strings are coerced (or rejected with a message) per control by apply_query instead
-        return flat
+    return parse_link_query(urllib.parse.urlencode(flat))
 
 
 def apply_session_query(controls: param.Parameterized, notify) -> None:

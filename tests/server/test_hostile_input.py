@@ -15,13 +15,12 @@ from pathlib import Path
 
 import param
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
-from panel.util import parse_query
 
 from app.controls import Controls
 from app.rotor_upload import MAX_BYTES, UploadError, parse_rotor_upload
-from app.url_sync import URL_KEYS, apply_query
+from app.url_sync import URL_KEYS, apply_query, parse_link_query
 
 REPO = Path(__file__).resolve().parents[2]
 KEYS = sorted(URL_KEYS.values())
@@ -107,7 +106,7 @@ def test_random_query_values_end_in_a_value_or_a_named_message(monkeypatch, quer
 @settings(max_examples=300, deadline=None)
 @given(st.text(alphabet=st.characters(codec="utf-8"), max_size=200))
 def test_random_url_query_strings(raw):
-    query = parse_query("?" + raw) if raw else {}
+    query = parse_link_query(raw)
     c = Controls()
     msgs = apply_query(c, query)
     assert all(isinstance(m, str) and m for m in msgs)
@@ -117,8 +116,10 @@ def test_random_url_query_strings(raw):
 
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.tuples(st.sampled_from(KEYS), hostile_text), max_size=6))
+@example(pairs=[("aero", "²")])  # CI 2026-12-01: Panel's parser raised int('²') on a Selector key
+@example(pairs=[("run_s", "²"), ("gj", "³")])
 def test_random_encoded_links(pairs):
-    q = parse_query("?" + urllib.parse.urlencode(pairs))
+    q = parse_link_query(urllib.parse.urlencode(pairs))
     c = Controls()
     apply_query(c, q)
     _check_controls(c)
