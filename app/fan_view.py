@@ -3,6 +3,8 @@ speed (paper Figs 6-7), per-rev lines dashed, the current rotor speed marked. Fr
 ``amra_core.modes.fan_plot``."""
 from __future__ import annotations
 
+import time
+
 import holoviews as hv
 import numpy as np
 import panel as pn
@@ -12,6 +14,8 @@ OMEGA_DIM = hv.Dimension("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
 F_DIM = hv.Dimension("frequency_hz", label="Natural frequency", unit="Hz")
 from .analysis import FAN_OMEGA_MAX as OMEGA_MAX
 
+MARK_PERIOD_S = 1.0  #: wall-clock period of the current-speed marker's moves [s]
+
 Omega = Stream.define("Omega", omega=0.0)
 
 
@@ -20,12 +24,16 @@ class FanView(pn.viewable.Viewer):
         super().__init__(**params)
         self.pipe = Pipe(data={})
         self.omega = Omega()
+        self._moved_at = -1e9
 
     def show(self, data: dict) -> None:
         self.pipe.send(data)
 
     def set_omega(self, omega: float) -> None:
-        if abs(omega - self.omega.omega) > 0.05:
+        """Move the current-speed marker (at most once a second: each move re-renders the plot)."""
+        now = time.monotonic()
+        if abs(omega - self.omega.omega) > 0.05 and now - self._moved_at >= MARK_PERIOD_S:
+            self._moved_at = now
             self.omega.event(omega=float(omega))
 
     def _plot(self, data):

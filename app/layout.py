@@ -91,7 +91,7 @@ def build_sidebar(d) -> list:
 
 
 def build_main(d) -> list:
-    plots = [pn.pane.HoloViews(p, sizing_mode="stretch_width", linked_axes=False) for p in d.histories.plots()]
+    plots = [pn.pane.Bokeh(p, sizing_mode="stretch_width") for p in d.histories.plots()]
     top = pn.Row(pn.Column(d.verdict, d.run_status, d.live_note, width=380),
                  pn.Column(d.alert, sizing_mode="stretch_width"), sizing_mode="stretch_width")
     live = pn.GridBox(*plots, ncols=2, sizing_mode="stretch_width")

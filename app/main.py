@@ -29,6 +29,9 @@ def create_app():
     serve_resources_locally()
     pn.extension(notifications=True, throttled=True)
     hv.extension("bokeh", logo=False)
+    # 2-D canvas, not WebGL (HoloViews' default): the plots are small, and on a machine without a
+    # GPU each WebGL plot is drawn in software and copied to a canvas on every repaint
+    hv.renderer("bokeh").webgl = False
     settings = ServerSettings.from_env()
     dash = Dashboard(settings, registry=get_registry(settings))
     page = dash.__panel__()

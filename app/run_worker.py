@@ -23,7 +23,7 @@ import numpy as np
 
 from amra_core.simulation import Case, Simulation
 
-TICK_S = 0.05  #: wall-clock period of a chunk [s]: 20 chunks per second
+TICK_S = 0.06  #: wall-clock period of a chunk [s]: about 17 chunks per second
 MAX_ROWS_PER_CHUNK = 40  #: rows posted per chunk at most (the full history is kept by the Simulation)
 STREAM_RATE_HZ = 200.0  #: rows posted per simulated second (>= 7 per period of a 28 Hz torsion mode)
 DISC_PERIOD_S = 1.0  #: wall-clock period of the disc and verdict updates during a run [s]

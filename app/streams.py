@@ -1,19 +1,28 @@
-"""Streaming time histories: one HoloViews ``Buffer`` per session, handed straight to the elements.
+"""Streaming time histories: one Bokeh ``ColumnDataSource`` per session, shared by the four plots
+and appended with ``source.stream(rows, rollover)`` (a ``ColumnsStreamed`` patch of the new rows).
 
-The buffer's columns are the plotted quantities in display units (derived columns are computed
-when rows are sent, never inside the element callbacks, so Bokeh receives only the new rows,
-``ColumnsStreamed``). ``gj_nm2`` is the GJ the solver used for each row, so a mid-run change is
-visible in the data. (The previous-run overlay is in :mod:`app.ladder`.)
+Why not the HoloViews ``Buffer`` of the style guide (A1): every ``Buffer.send`` refreshes each
+``DynamicMap`` through HoloViews' ``hold_render``, which freezes the Bokeh document and, on exit,
+recomputes the references of all its models (354 in a session: 0.06-0.12 s each), and rebuilds
+each element from the whole buffer. Measured in a served session on the 2-core machine
+(``/tmp``-profiled pump, 2026-12-01): 0.37 s per pump, 1.8 plot updates/s in the browser. A
+``stream`` call changes no references, so it needs no recompute; the pump then costs about a
+millisecond. Range tracking is done in the browser (``DataRange1d``), with the time axis shared.
+
+The columns are the plotted quantities in display units; ``gj_nm2`` is the GJ the solver used for
+each row, so a mid-run change is visible in the data (and in the rotor-speed hover). The window
+is the last :data:`BUFFER_ROWS` rows (120 s at 200 rows/s); the full-resolution history is kept by
+the Simulation and exported as CSV. (The previous-run overlay is in :mod:`app.ladder`.)
 """
 from __future__ import annotations
 
 import math
-from functools import partial
 
 import holoviews as hv
 import numpy as np
 import pandas as pd
-from holoviews.streams import Buffer
+from bokeh.models import ColumnDataSource, DataRange1d, HoverTool, Legend
+from bokeh.plotting import figure
 
 from amra_core.simulation import COL
 
@@ -31,12 +40,17 @@ DIMS = {
 COLUMNS = tuple(DIMS)
 
 
+def _axis_label(col: str) -> str:
+    d = DIMS[col]
+    return f"{d.label} [{d.unit}]"
+
+
 def empty_frame() -> pd.DataFrame:
     return pd.DataFrame({c: np.zeros(0) for c in COLUMNS})
 
 
 def frame_from_rows(rows: np.ndarray, gj_nm2: float) -> pd.DataFrame:
-    """History rows (columns of ``amra_core.simulation.HISTORY_COLUMNS``, SI) to the buffer's frame."""
+    """History rows (columns of ``amra_core.simulation.HISTORY_COLUMNS``, SI) to the plotted frame."""
     deg = 180.0 / math.pi
     return pd.DataFrame({
         "t_s": rows[:, COL["t_s"]],
@@ -50,39 +64,54 @@ def frame_from_rows(rows: np.ndarray, gj_nm2: float) -> pd.DataFrame:
 
 
 class TimeHistories:
-    """The session's buffer and the four time-history plots."""
+    """The session's data source and the four time-history plots built on it.
+
+    :meth:`send` and :meth:`clear` must run on the session's event loop (the dashboard's pump)."""
 
     def __init__(self, length: int = BUFFER_ROWS):
-        self.buffer = Buffer(empty_frame(), length=length, index=False)
+        self.length = int(length)
+        self.source = ColumnDataSource({c: np.zeros(0) for c in COLUMNS}, name="amra-time-histories")
         self.sent_rows = 0
 
     def send(self, frame: pd.DataFrame) -> None:
         if len(frame):
-            self.buffer.send(frame)
+            self.source.stream({c: frame[c].to_numpy(dtype=float) for c in COLUMNS}, rollover=self.length)
             self.sent_rows += len(frame)
 
     def clear(self) -> None:
-        """Empty the live buffer (a new run starts)."""
-        self.buffer.clear()
+        """Empty the live plots (a new run starts)."""
+        self.source.data = {c: np.zeros(0) for c in COLUMNS}
         self.sent_rows = 0
 
-    def _curve(self, stream, vdim: str, label: str, **opts):
-        vdims = [DIMS[vdim]] + ([DIMS["gj_nm2"]] if vdim == "omega_rad_s" else [])  # GJ in the hover
-        return hv.DynamicMap(partial(hv.Curve, kdims=[DIMS["t_s"]], vdims=vdims, label=label),
-                             streams=[stream]).opts(**opts)
+    def frame(self) -> pd.DataFrame:
+        """What the plots hold now, as a frame of :data:`COLUMNS`."""
+        return pd.DataFrame({c: np.asarray(self.source.data[c], dtype=float) for c in COLUMNS})
 
     def plots(self) -> list:
-        """Rotor speed, teeter, tip twist (both blades) and descent rate against time. Each is one
-        element per streamed quantity (HoloViews' per-update cost grows with the elements on the
-        buffer; the previous-run comparison is in the ladder view)."""
-        common = dict(responsive=True, height=220, show_grid=True, framewise=True, tools=["hover"])
+        """Rotor speed, teeter, tip twist (both blades) and descent rate against time, with the
+        time axis shared (pan or zoom one, all follow)."""
+        x_range = DataRange1d(only_visible=True)
         out = []
-        for vdim, title, color in (("omega_rad_s", "Rotor speed", "#1f77b4"), ("teeter_deg", "Teeter angle", "#2ca02c"),
-                                   ("descent_m_s", "Descent rate", "#9467bd")):
-            out.append(self._curve(self.buffer, vdim, "current run", color=color, line_width=2, title=title,
-                                   **common))
-        tw0 = self._curve(self.buffer, "twist0_deg", "blade 0", color="#d62728", line_width=2, **common)
-        tw1 = self._curve(self.buffer, "twist1_deg", "blade 1", color="#ff7f0e", line_width=2, **common)
-        out.insert(2, (tw0 * tw1).opts(hv.opts.Overlay(title="Elastic tip twist, both blades",
-                                                       legend_position="top_left")))
+        for cols, title, colours in ((("omega_rad_s",), "Rotor speed", ("#1f77b4",)),
+                                     (("teeter_deg",), "Teeter angle", ("#2ca02c",)),
+                                     (("twist0_deg", "twist1_deg"), "Elastic tip twist, both blades",
+                                      ("#d62728", "#ff7f0e")),
+                                     (("descent_m_s",), "Descent rate", ("#9467bd",))):
+            fig = figure(title=title, height=220, sizing_mode="stretch_width", x_range=x_range,
+                         y_range=DataRange1d(only_visible=True), tools="pan,wheel_zoom,box_zoom,reset,save",
+                         x_axis_label=_axis_label("t_s"), y_axis_label=_axis_label(cols[0]),
+                         output_backend="canvas")
+            items = []
+            for col, colour, label in zip(cols, colours, ("blade 0", "blade 1") if len(cols) == 2 else ("current run",)):
+                r = fig.line("t_s", col, source=self.source, line_width=2, color=colour)
+                items.append((label, [r]))
+            tips = [("t", "@t_s{0.000} s"), (DIMS[cols[0]].label, f"@{cols[0]}{{0.000}} {DIMS[cols[0]].unit}")]
+            if cols[0] == "omega_rad_s":
+                tips.append(("GJ", "@gj_nm2{0.0} N m²/rad"))
+            fig.add_tools(HoverTool(tooltips=tips, mode="vline", renderers=[r]))
+            if len(cols) == 2:
+                legend = Legend(items=items, location="top_left")
+                fig.add_layout(legend)
+            fig.toolbar.logo = None
+            out.append(fig)
         return out

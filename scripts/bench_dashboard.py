@@ -36,17 +36,30 @@ JS_LAST = """() => { let best = null;
       if (t && gj && om && t.length && (!best || t.length > best[0])) best = [t.length, t[t.length - 1], gj[gj.length - 1]];
   } } } return best; }"""
 
-# poll every animation frame until the newest point has a GJ other than `old`; returns seconds
-JS_WAIT_NEW_GJ = """(old) => new Promise((resolve) => { const t0 = performance.now(); const get = %s;
-  const step = () => { const s = get(); if (s && s[2] !== old) resolve((performance.now() - t0) / 1000);
+# arm (without waiting): note the page time of the next pointer release, then poll every animation
+# frame until the newest point has a GJ other than `old` and note that time too. (A function that
+# returned the Promise would make Playwright wait for it before the drag could even start.)
+JS_ARM_NEW_GJ = """(old) => { window.__amraRelease = null; window.__amraSeen = null; const get = %s;
+  document.addEventListener('pointerup', () => { window.__amraRelease = performance.now(); },
+                            {capture: true, once: true});
+  const t0 = performance.now();
+  const step = () => { const s = get(); const now = performance.now();
+    if (window.__amraRelease !== null && s && s[2] !== old) window.__amraSeen = now;
+    else if (now - t0 < 30000) requestAnimationFrame(step); };
+  step(); }""" % JS_LAST
+
+# seconds from the release to the first frame showing the new GJ (-1: not seen in 20 s)
+JS_LATENCY = """() => new Promise((resolve) => { const t0 = performance.now();
+  const step = () => { if (window.__amraSeen !== null) resolve((window.__amraSeen - window.__amraRelease) / 1000);
     else if (performance.now() - t0 > 20000) resolve(-1); else requestAnimationFrame(step); };
-  step(); })""" % JS_LAST
+  step(); })"""
 
 # count distinct data states over `secs` seconds of animation frames
 JS_RATE = """(secs) => new Promise((resolve) => { const t0 = performance.now(); const get = %s;
-  let last = null, n = 0; const step = () => { const s = get(); const k = s ? s[0] + ':' + s[1] : '';
-    if (k !== last) { n += 1; last = k; }
-    if (performance.now() - t0 < secs * 1000) requestAnimationFrame(step); else resolve((n - 1) / secs); };
+  let last = null, n = 0, frames = 0; const step = () => { const s = get(); const k = s ? s[0] + ':' + s[1] : '';
+    frames += 1; if (k !== last) { n += 1; last = k; }
+    if (performance.now() - t0 < secs * 1000) requestAnimationFrame(step);
+    else resolve([(n - 1) / secs, frames / secs]); };
   step(); })""" % JS_LAST
 
 
@@ -105,15 +118,16 @@ def main() -> int:
             controls_s = time.monotonic() - t0
             fcp = page.evaluate("() => (performance.getEntriesByName('first-contentful-paint')[0] || {}).startTime")
             page.wait_for_function("() => " + JS_LAST.replace("() =>", "(() =>", 1) + ")() !== undefined", timeout=60_000)
+            _, idle_fps = page.evaluate(JS_RATE, 2.0)
             page.locator(".amra-run button").click()
             page.wait_for_function(f"() => {{ const s = ({JS_LAST})(); return s && s[1] > 2.0; }}", timeout=120_000)
-            rate = page.evaluate(JS_RATE, args.window)
+            rate, fps = page.evaluate(JS_RATE, args.window)
             lat = []
             for i in range(args.repeats):
                 old = page.evaluate(JS_LAST)[2]
-                waiter = page.evaluate_handle(JS_WAIT_NEW_GJ, old)  # starts polling now
+                page.evaluate(JS_ARM_NEW_GJ, old)
                 drag_gj(page, -25 if i % 2 == 0 else 25)
-                lat.append(waiter.json_value())
+                lat.append(page.evaluate(JS_LATENCY))
                 page.wait_for_timeout(1500)
             sessions[-1].worker.stop()
             browser.close()
@@ -124,7 +138,8 @@ def main() -> int:
     print(f"slider release -> first new streamed point: median {statistics.median(good):.3f} s "
           f"(runs: {', '.join(f'{x:.3f}' for x in lat)}; -1 = not seen in 20 s)" if good else
           f"slider release -> first new point: not seen ({lat})")
-    print(f"plot updates per second while streaming: {rate:.1f} /s (over {args.window:g} s)")
+    print(f"plot updates per second while streaming: {rate:.1f} /s (over {args.window:g} s; the browser drew "
+          f"{fps:.0f} frames/s; {idle_fps:.0f} before the run)")
     print(f"machine load average: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     return 0
 

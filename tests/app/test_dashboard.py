@@ -1,4 +1,4 @@
-"""The session object without a browser: pump -> Buffer, apply-live from the controls, stop on
+"""The session object without a browser: pump -> the plots' data source, apply-live from the controls, stop on
 close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as messages."""
 from __future__ import annotations
 
@@ -27,11 +27,11 @@ def pump_until(d, pred, wait, timeout_s=60, what="condition"):
     wait(step, timeout_s, what=what)
 
 
-def test_a_run_streams_into_the_buffer_and_ends_with_a_verdict(dash, wait):
+def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     dash.controls.param.update(run_s=1.0, speed=10.0)
     assert dash.start_run()
     pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
-    data = dash.histories.buffer.data
+    data = dash.histories.frame()
     assert len(data) > 20 and list(data.columns)[:2] == ["t_s", "omega_rad_s"]
     assert data["t_s"].iloc[-1] == pytest.approx(1.0, abs=0.01) and (data["gj_nm2"] == 1500.0).all()
     assert dash.verdict.verdict.verdict == "stable" and "data-final='true'" in dash.verdict.pane.object
@@ -43,12 +43,12 @@ def test_a_run_streams_into_the_buffer_and_ends_with_a_verdict(dash, wait):
 def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     dash.controls.param.update(run_s=4.0, speed=4.0)
     dash.start_run()
-    pump_until(dash, lambda: len(dash.histories.buffer.data) and dash.histories.buffer.data["t_s"].iloc[-1] > 0.5,
+    pump_until(dash, lambda: len(dash.histories.frame()) and dash.histories.frame()["t_s"].iloc[-1] > 0.5,
                wait, what="0.5 s of run")
-    t_change = dash.histories.buffer.data["t_s"].iloc[-1]
+    t_change = dash.histories.frame()["t_s"].iloc[-1]
     dash.controls.gj_nm2 = 700.0
-    pump_until(dash, lambda: (dash.histories.buffer.data["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
-    data = dash.histories.buffer.data
+    pump_until(dash, lambda: (dash.histories.frame()["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
+    data = dash.histories.frame()
     first_new = data[data["gj_nm2"] == 700.0]["t_s"].iloc[0]
     assert first_new > t_change and np.all(np.diff(data["t_s"]) > 0)  # the same run, continuing
     assert "applied live" in dash.live_note.object

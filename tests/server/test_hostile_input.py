@@ -173,7 +173,7 @@ def test_one_session_cannot_stop_or_see_another_run(tmp_path):
         b.close()
         time.sleep(0.5)
         assert a.worker.running, "another session's Stop/Reset/close stopped this run"
-        assert b.histories.sent_rows == 0 and len(b.histories.buffer.data) == 0
+        assert b.histories.sent_rows == 0 and len(b.histories.frame()) == 0
         assert a.worker is not b.worker and a.outbox is not b.outbox and a.histories is not b.histories
         n = a.pump()
         time.sleep(0.3)
