@@ -230,7 +230,7 @@ class Dashboard(pn.viewable.Viewer):
         document freeze: leaving one recomputes the references of every model in the page,
         0.06-0.12 s here, and the streamed rows change no references.)"""
         frames = []
-        run_text = None
+        run_text, clock_only = None, False  # the newest status text; a running clock is rate-limited
         while True:
             try:
                 kind, p = self.outbox.get_nowait()
@@ -241,9 +241,9 @@ class Dashboard(pn.viewable.Viewer):
             if kind == "rows":
                 if len(p["rows"]):
                     frames.append(frame_from_rows(p["rows"], p["gj_nm2"]))
-                run_text = f"running, t = {p['t_s']:.2f} s"
+                run_text, clock_only = f"running, t = {p['t_s']:.2f} s", True
             elif kind == "status":
-                run_text = p["text"]
+                run_text, clock_only = p["text"], False
             elif kind == "started":
                 self.verdict.show(None, False)
                 if p["start_note"].startswith("no steady"):
@@ -275,7 +275,7 @@ class Dashboard(pn.viewable.Viewer):
                 self.ladder.info.object = "Fidelity ladder: the current case at the three fidelities."
             elif kind == "error":
                 self.notify(p["text"])
-        if run_text is not None and (not run_text.startswith("running, t =")
+        if run_text is not None and (not clock_only
                                      or time.perf_counter() - self._run_text_at >= RUN_TEXT_PERIOD_S):
             self._run_text(run_text)  # the clock text twice a second: a Markdown update costs ~5 ms
         n = 0

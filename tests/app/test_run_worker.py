@@ -47,7 +47,7 @@ def test_run_streams_paced_chunks_and_finishes(wait):
     assert len(rows) >= 4  # paced in chunks, not one burst
     t = np.concatenate([p["rows"][:, COL["t_s"]] for p in rows])
     assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(1.0, abs=0.01)
-    assert all(len(p["rows"]) <= 40 for p in rows)  # at most 40 per chunk; 200 per simulated s  # decimated for the browser
+    assert all(len(p["rows"]) <= 40 for p in rows)  # decimated for the browser: at most 40 rows per chunk
     fin = inbox.of("finished")[0]
     assert fin["status"] == "running" and not fin["stopped"] and fin["history"].shape[1] == len(COL)
     verdicts = [p for p in inbox.of("verdict") if p["final"]]
