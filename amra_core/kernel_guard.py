@@ -84,8 +84,10 @@ def check_model_arrays(m: ModelArrays) -> tuple:
             _shape(f"ModelArrays.{name}", getattr(m, name), (ns, ns))
         for name in ("sf", "gy0", "ugy0"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (ns,))
-        for name in ("ls2", "li2"):
+        for name in ("ls2", "li2", "glh", "uglh"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (2, ns, ns))
+        for name in ("gl0", "ugl0"):
+            _shape(f"ModelArrays.{name}", getattr(m, name), (2, ns))
         _shape("ModelArrays.st", m.st, (nst, N_S_COLS))
         for name in ("shw", "shd", "sht"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (2, nst, ns))

@@ -158,7 +158,7 @@ def free_stream(y, m):
 
 @kernel
 def rhs(y, dy, m, loads, work):
-    """dy = f(y). ``m`` is a ModelArrays; ``loads`` receives thrust, torque etc.; ``work`` >= 2 n_s."""
+    """dy = f(y). ``m`` is a ModelArrays; ``loads`` receives thrust, torque etc.; ``work`` >= 4 n_s."""
     p = m.p
     nst = int(p[P_NST]); ns = int(p[P_NS])
     rho = p[P_RHO]; R = p[P_R]; r0 = p[P_R0]
@@ -203,20 +203,24 @@ def rhs(y, dy, m, loads, work):
                 lagm1 += (r - r0) * ffwd * wgt
             hforce += (-ffwd * sp - fup * wp * cp) * wgt
     # Structure and rotor speed from one Lagrangian (docs/model-equations.md):
-    #   M x'' + g(x) Omega' = F_x = Q + Omega^2 f - (K0 + Omega^2 K2) x - C x'
+    #   M x'' + g(x) Omega' + sum gl_b zeta_b'' = F_x = Q + Omega^2 f - (K0 + Omega^2 K2) x - C x'
     #   J(x) Omega' + sum S_b zeta_b'' + g^T x'' = torque - Omega J' - x'^T H x' - sum S_b' zeta_b'
-    #   I_b zeta_b'' + S_b Omega' = lag moment + Omega^2 f_lag - (k_lag + Omega^2 k2_lag) zeta_b - c zeta_b'
-    #                               - Omega S_b' - I_b' zeta_b'
-    # with J = I_R + 2 f^T x - x^T K2 x + 2 f_lag sum zeta - k2_lag |zeta|^2, g = g0 + H x and the
-    # coned blade's lag coupling S_b(x) and inertia I_b(x) (plus their Coriolis forces on x),
-    # by eliminating x'' and zeta'' (u = M^-1 g is kept in dy[x'] until Omega' is known).
+    #   I_b zeta_b'' + S_b Omega' + gl_b^T x'' = lag moment + Omega^2 f_lag - (k_lag + Omega^2 k2_lag) zeta_b
+    #                               - c zeta_b' - Omega S_b' - I_b' zeta_b' - x'^T HL_b x'
+    # with J = I_R + 2 f^T x - x^T K2 x + 2 f_lag sum zeta - k2_lag |zeta|^2, g = g0 + H x, the
+    # lag-pivot coupling gl_b = gl0_b + HL_b x and the coned blade's lag coupling S_b(x) and inertia
+    # I_b(x) (plus their Coriolis forces on x), by eliminating x'' (u = M^-1 g is kept in dy[x'] and
+    # ul_b = M^-1 gl_b in work[2 ns:4 ns] until Omega' and zeta'' are known), then the 3 x 3 system
+    # of (Omega', zeta_0'', zeta_1'').
     om2 = om * om
     z0 = y[Y_ZETA0]; z1 = y[Y_ZETA0 + 1]; zd0 = y[Y_ZETAD0]; zd1 = y[Y_ZETAD0 + 1]
     fx = 0.0; xk2x = 0.0; jdot = 0.0; xhx = 0.0; uf = 0.0; ug = 0.0
     xs0x = 0.0; xs1x = 0.0; xs0xd = 0.0; xs1xd = 0.0; xi0x = 0.0; xi1x = 0.0; xi0xd = 0.0; xi1xd = 0.0
+    ugl0 = 0.0; ugl1 = 0.0; l00 = 0.0; l01 = 0.0; l11 = 0.0; ul0f = 0.0; ul1f = 0.0; xhl0 = 0.0; xhl1 = 0.0
     for i in range(ns):
         k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
         s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
+        h0x = 0.0; h1x = 0.0; h0xd = 0.0; h1xd = 0.0; v0x = 0.0; v1x = 0.0
         for k in range(ns):
             q = y[x0 + k]; qd = y[xd0 + k]
             k0x += m.k0[i, k] * q
@@ -229,6 +233,12 @@ def rhs(y, dy, m, loads, work):
             s1x += m.ls2[1, i, k] * q
             i0x += m.li2[0, i, k] * q
             i1x += m.li2[1, i, k] * q
+            h0x += m.glh[0, i, k] * q
+            h1x += m.glh[1, i, k] * q
+            h0xd += m.glh[0, i, k] * qd
+            h1xd += m.glh[1, i, k] * qd
+            v0x += m.uglh[0, i, k] * q
+            v1x += m.uglh[1, i, k] * q
         # flap-lag Coriolis: -d/dx of Omega S_b(x) zeta_b' + 1/2 I_b(x) zeta_b'^2
         f = work[i] + om2 * (m.sf[i] - k2x) - k0x - cxd - om * (zd0 * s0x + zd1 * s1x) \
             - zd0 * zd0 * i0x - zd1 * zd1 * i1x
@@ -236,12 +246,20 @@ def rhs(y, dy, m, loads, work):
         qi = y[x0 + i]; qdi = y[xd0 + i]
         u = m.ugy0[i] + ux
         dy[xd0 + i] = u
+        ul0 = m.ugl0[0, i] + v0x; ul1 = m.ugl0[1, i] + v1x
+        work[2 * ns + i] = ul0
+        work[3 * ns + i] = ul1
+        gl0i = m.gl0[0, i] + h0x; gl1i = m.gl0[1, i] + h1x
         fx += m.sf[i] * qi
         xk2x += qi * k2x
         jdot += (m.sf[i] - k2x) * qdi
         xhx += qdi * hxd
         uf += u * f
         ug += u * (m.gy0[i] + hx)
+        ugl0 += u * gl0i; ugl1 += u * gl1i
+        l00 += ul0 * gl0i; l01 += ul0 * gl1i; l11 += ul1 * gl1i
+        ul0f += ul0 * f; ul1f += ul1 * f
+        xhl0 += qdi * h0xd; xhl1 += qdi * h1xd
         xs0x += qi * s0x; xs1x += qi * s1x; xs0xd += qdi * s0x; xs1xd += qdi * s1x
         xi0x += qi * i0x; xi1x += qi * i1x; xi0xd += qdi * i0x; xi1xd += qdi * i1x
     # rotor speed and lag: S_b = S - x^T S2_b x / 2, I_b = I_z - x^T I2_b x
@@ -252,8 +270,13 @@ def rhs(y, dy, m, loads, work):
     il0 = p[P_ILAG] - xi0x; il1 = p[P_ILAG] - xi1x
     flag = om2 * p[P_FLAG]
     # with S_b' = -x^T S2_b x', I_b' = -2 x^T I2_b x'
-    f1 = lagm0 + flag - klag * z0 - clag * zd0 + om * xs0xd + 2.0 * xi0xd * zd0
-    f2 = lagm1 + flag - klag * z1 - clag * zd1 + om * xs1xd + 2.0 * xi1xd * zd1
+    f1 = lagm0 + flag - klag * z0 - clag * zd0 + om * xs0xd + 2.0 * xi0xd * zd0 - xhl0
+    f2 = lagm1 + flag - klag * z1 - clag * zd1 + om * xs1xd + 2.0 * xi1xd * zd1 - xhl1
+    # lag block after eliminating x'': A [zeta0'', zeta1''] = b - c Omega'
+    a11 = il0 - l00; a12 = -l01; a22 = il1 - l11
+    b1 = f1 - ul0f; b2 = f2 - ul1f
+    c1 = sl0 - ugl0; c2 = sl1 - ugl1
+    det = a11 * a22 - a12 * a12
     dy[Y_PSI] = om
     if p[P_HOLD_OMEGA] > 0.5:
         omd = 0.0
@@ -261,16 +284,22 @@ def rhs(y, dy, m, loads, work):
         jpol = p[P_IR] + 2.0 * fx - xk2x + 2.0 * p[P_FLAG] * (z0 + z1) - k2lag * (z0 * z0 + z1 * z1)
         jdot = 2.0 * jdot + 2.0 * p[P_FLAG] * (zd0 + zd1) - 2.0 * k2lag * (z0 * zd0 + z1 * zd1)
         f0 = torque - om * jdot - xhx + xs0xd * zd0 + xs1xd * zd1
-        omd = (f0 - sl0 * f1 / il0 - sl1 * f2 / il1 - uf) / (jpol - sl0 * sl0 / il0 - sl1 * sl1 / il1 - ug)
+        # Schur complement of the lag block: c^T A^-1 b and c^T A^-1 c
+        cab = (c1 * (a22 * b1 - a12 * b2) + c2 * (a11 * b2 - a12 * b1)) / det
+        cac = (c1 * (a22 * c1 - a12 * c2) + c2 * (a11 * c2 - a12 * c1)) / det
+        omd = (f0 - uf - cab) / (jpol - ug - cac)
     dy[Y_OMEGA] = omd
-    dy[Y_ZETAD0] = (f1 - sl0 * omd) / il0
-    dy[Y_ZETAD0 + 1] = (f2 - sl1 * omd) / il1
+    r1 = b1 - c1 * omd; r2 = b2 - c2 * omd
+    zdd0 = (a22 * r1 - a12 * r2) / det
+    zdd1 = (a11 * r2 - a12 * r1) / det
+    dy[Y_ZETAD0] = zdd0
+    dy[Y_ZETAD0 + 1] = zdd1
     for i in range(ns):
         acc = 0.0
         for k in range(ns):
             acc += m.minv[i, k] * work[ns + k]
         dy[x0 + i] = y[xd0 + i]
-        dy[xd0 + i] = acc - dy[xd0 + i] * omd
+        dy[xd0 + i] = acc - dy[xd0 + i] * omd - work[2 * ns + i] * zdd0 - work[3 * ns + i] * zdd1
     dy[Y_ZETA0] = zd0
     dy[Y_ZETA0 + 1] = zd1
     # vehicle descent and inflow
@@ -397,7 +426,7 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     n = y.shape[0]
     ns = int(m.p[P_NS])
     k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); yt = np.empty(n)
-    loads = np.zeros(8); work = np.empty(2 * ns + 2)
+    loads = np.zeros(8); work = np.empty(4 * ns + 2)
     rows = 0
     status = 0
     done = 0
@@ -439,5 +468,5 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
 @kernel
 def evaluate(y, m, dy, loads):
     """One right-hand-side evaluation (for trim residuals, Jacobians and tests)."""
-    work = np.empty(2 * int(m.p[P_NS]) + 2)
+    work = np.empty(4 * int(m.p[P_NS]) + 2)
     rhs(y, dy, m, loads, work)

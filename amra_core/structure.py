@@ -118,6 +118,11 @@ class RotorStructure:
     f_lag: float  #: static lag moment per Omega^2 of the chordwise CG offset, r0 int m e [kg m]
     S2: np.ndarray  #: (2 blades, n, n): lag coupling S_b(x) = S_lag - 1/2 x^T S2[b] x
     I2: np.ndarray  #: (2 blades, n, n): lag inertia I_b(x) = I_lag - x^T I2[b] x
+    #: (2 blades, n): lag-pivot gyroscopic coupling at x = 0, ``gl_b = gl0[b] + HL[b] x`` [kg m]:
+    #: the in-plane momentum of blade b's flap/twist motion about its lag pivot (see
+    #: :func:`blade_pitch_and_gyro`)
+    gl0: np.ndarray = None
+    HL: np.ndarray = None  #: (2 blades, n, n): blade b's part of ``H`` (``HL[0] + HL[1] = H``)
 
     @property
     def n(self) -> int:
@@ -206,7 +211,7 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool
     return M, K0, K2
 
 
-def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
+def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True, lag_pivot: bool = False):
     """(f, g0, H) of one blade over ``[beta, q]``: the terms that the static pitch and the rotor
     speed add to the Lagrangian (derivation: ``docs/model-equations.md``).
 
@@ -218,7 +223,15 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
       ``F = int [m e r theta0 theta - m e u + I_ea (theta0 + theta) w']`` (the second-order
       ``m e r theta^2/2`` is left out, see the comment below),
       ``u = 1/2 int_0^r (w'^2 + k_A^2 theta'^2)`` the foreshortening (hub bar included), so
-      ``g0 = int (m e r theta0 phi_t + I_ea theta0 phi_w')`` and ``H`` = the Hessian of F."""
+      ``g0 = int (m e r theta0 phi_t + I_ea theta0 phi_w')`` and ``H`` = the Hessian of F.
+
+    ``lag_pivot=True``: the same momentum about the blade's lag pivot at ``r0`` instead of the
+    shaft, ``int [(X - r0) Y' - Y X'] dm`` (the coupling with the lag rate ``zeta_b'``): the arm
+    ``r`` of the ``m e r theta0`` term becomes ``r - r0``; ``Y X'`` does not depend on the pivot, so
+    ``H`` is the same. It is third order (lag rate x pitch x deflection rate) but kept: without it
+    the twist's in-plane momentum acts on the rotor speed alone, whose inertia with both blades
+    free to lag is the small ``J - sum S^2/I_z`` (1.9 kg m^2), and a fast twist oscillation swung
+    the rotor speed by +-25 % (docs/model-equations.md section 2)."""
     st = rotor.stations
     r, wq = quadrature(rotor, mesh)
     _, dPw, _, Pt, dPt = _blade_shapes(mesh, r)
@@ -235,7 +248,8 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
         return A.T @ (a * wq)
 
     f = vec(m * e * r * th0, dPw) - vec(I * th0, Pt)
-    g0 = vec(m * e * r * th0, Pt) + vec(I * th0, dPw)
+    arm = r - mesh.root_m if lag_pivot else r
+    g0 = vec(m * e * arm * th0, Pt) + vec(I * th0, dPw)
     # The in-plane momentum of the pitching CG, m e r theta_e theta_e' (a ``m e r theta_e^2/2`` in F),
     # is left out: its lag counterpart (the same motion about the lag pivot) is not modelled, and
     # with the small rotor-speed inertia of blades free to lag (J - sum S^2/I_z ~ 2 kg m^2) the
@@ -253,7 +267,7 @@ def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True):
         th0p = rotor.incidence_rad + float(st.at("twist_rad", pm.r_m))
         mp = pm.mass_kg
         f += mp * (pm.r_m * ep * th0p * dPw1 - ep**2 * th0p * Pt1)
-        g0 += mp * (pm.r_m * ep * th0p * Pt1 + ep**2 * th0p * dPw1)
+        g0 += mp * ((pm.r_m - (r0 if lag_pivot else 0.0)) * ep * th0p * Pt1 + ep**2 * th0p * dPw1)
         H += mp * ep**2 * (np.outer(Pt1, dPw1) + np.outer(dPw1, Pt1))
     return f, g0, H
 
@@ -288,10 +302,11 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
     """Both blades and the teeter hinge, plus the lag/rotor-speed inertias."""
     Mb, K0b, K2b = blade_matrices(rotor, mesh, added_mass, trapeze)
     fb, g0b, Hb = blade_pitch_and_gyro(rotor, mesh, trapeze)
+    _, gl0b, _ = blade_pitch_and_gyro(rotor, mesh, trapeze, lag_pivot=True)
     S2b, I2b = blade_lag_geometry(rotor, mesh)
     nq = mesh.n_q
     n = 1 + 2 * nq
-    S2 = np.zeros((2, n, n)); I2 = np.zeros((2, n, n))
+    S2 = np.zeros((2, n, n)); I2 = np.zeros((2, n, n)); HL = np.zeros((2, n, n)); gl0 = np.zeros((2, n))
     M = np.zeros((n, n)); K0 = np.zeros((n, n)); K2 = np.zeros((n, n)); H = np.zeros((n, n))
     f = np.zeros(n); g0 = np.zeros(n)
     for b, sign in ((0, 1.0), (1, -1.0)):
@@ -301,6 +316,8 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
             G[np.ix_(idx, idx)] += B * np.outer(S, S)
         f[idx] += fb * S
         g0[idx] += g0b * S
+        gl0[b][idx] = gl0b * S
+        HL[b][np.ix_(idx, idx)] = Hb * np.outer(S, S)
         S2[b][np.ix_(idx, idx)] = S2b * np.outer(S, S)
         I2[b][np.ix_(idx, idx)] = I2b * np.outer(S, S)
     M[0, 0] += rotor.hub_teeter_inertia_kg_m2
@@ -332,4 +349,5 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
         f_lag += r0 * pm.mass_kg * ep
     k_lag = K_FLAP_SPRING * st.mean("ei_lag_nm2") / rotor.blade_length_m
     I_R = rotor.hub_polar_inertia_kg_m2 + 2.0 * I_blade
-    return RotorStructure(mesh, M, K0, K2, kinds, blade_of, I_R, I_lag, S_lag, k_lag, k2_lag, f, g0, H, f_lag, S2, I2)
+    return RotorStructure(mesh, M, K0, K2, kinds, blade_of, I_R, I_lag, S_lag, k_lag, k2_lag, f, g0, H, f_lag, S2, I2,
+                          gl0, HL)
