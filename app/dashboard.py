@@ -2,7 +2,8 @@
 
 Built fresh per session by :func:`app.main.create_app`. Worker threads post ``(kind, payload)``
 messages to :attr:`Dashboard.outbox`; :meth:`Dashboard.pump` (a 25 ms periodic callback on the
-session's event loop) drains it, streams rows into the plots' data source, and updates the panes, so the
+session's event loop) drains it, streams rows into the plots' data source (as fast as the
+browser draws them, :mod:`app.streams`), and updates the panes, so the
 document is only touched on its own loop. Closing the session stops the worker and releases the
 map subscription (:meth:`Dashboard.close`).
 """
@@ -36,7 +37,7 @@ from .verdict_card import VerdictCard
 PUMP_MS = 25  #: pump period [ms]: more than twice the worker's chunk rate, so each chunk is sent on its own
 REFRESH_DELAY_MS = 300  #: a parameter change re-runs the analyses this long after the last change [ms]
 RUN_TEXT_PERIOD_S = 0.5  #: wall-clock period of the "running, t = ..." status text [s]
-MAP_POLL_EVERY = 16  #: pump ticks between map polls (0.4 s)
+MAP_POLL_S = 0.4  #: wall-clock period of the map poll [s], times the map's load factor
 CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)
@@ -70,6 +71,9 @@ class Dashboard(pn.viewable.Viewer):
         self._run_text_at = 0.0
         self._refresh_pending = None
         self._next_pump = 0.0
+        self._next_map_poll = 0.0
+        self.budget = None  #: the server's StreamBudget, in a served session (start_periodic)
+        self._in_budget = False
         self._period_s = PUMP_MS / 1000.0
         self._locus_key = None
         self._periodic = None
@@ -278,15 +282,24 @@ class Dashboard(pn.viewable.Viewer):
         if run_text is not None and (not clock_only
                                      or time.perf_counter() - self._run_text_at >= RUN_TEXT_PERIOD_S):
             self._run_text(run_text)  # the clock text twice a second: a Markdown update costs ~5 ms
-        n = 0
+        if self.budget is not None:  # the server's updates per second, shared by the streaming sessions
+            streaming = self.worker.running or self.histories.pending_rows > 0
+            if streaming != self._in_budget:
+                (self.budget.join if streaming else self.budget.leave)(id(self))
+                self._in_budget = streaming
+            self.histories.min_interval_s = self.budget.min_interval_s() if streaming else 0.0
         if frames:
             frame = pd.concat(frames, ignore_index=True) if len(frames) > 1 else frames[0]
-            self.histories.send(frame)
+            n = self.histories.send(frame)  # sent now, or once the browser has drawn the last batch
             self.fan.set_omega(float(frame["omega_rad_s"].iloc[-1]))
-            n = len(frame)
+        else:
+            n = self.histories.flush()
         self._ticks += 1
-        if self.map is not None and self._ticks % MAP_POLL_EVERY == 1:
+        now = time.perf_counter()
+        if self.map is not None and now >= self._next_map_poll:
             self.map.poll()
+            # every session polls its map, so a loaded server polls each less often
+            self._next_map_poll = now + MAP_POLL_S * self.map.load_factor()
         return n
 
     def _run_text(self, text: str) -> None:
@@ -311,6 +324,9 @@ class Dashboard(pn.viewable.Viewer):
     def start_periodic(self) -> None:
         from .server_limits import stream_period_ms
         self._period_s = stream_period_ms(PUMP_MS) / 1000.0
+        self.histories.enable_flow_control()  # a browser is attached: send what it can draw
+        from .server_limits import get_stream_budget
+        self.budget = get_stream_budget()
         from panel.io.callbacks import PeriodicCallback
         # background: a periodic pump must not flag the page busy (the busy indicator would send
         # two extra messages per tick and the page would look permanently loading)
@@ -325,6 +341,8 @@ class Dashboard(pn.viewable.Viewer):
         if self._periodic is not None:
             self._periodic.stop()
         self.worker.stop(timeout=5.0)
+        if self.budget is not None:
+            self.budget.leave(id(self))
         self.tasks.close()
         if self.map is not None:
             self.map.release()

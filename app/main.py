@@ -9,6 +9,7 @@ from __future__ import annotations
 import holoviews as hv
 import panel as pn
 
+from app import browser_tuning
 from app.dashboard import Dashboard
 from app.layout import TITLE
 from app.map_jobs import get_registry
@@ -37,6 +38,7 @@ def create_app():
     page = dash.__panel__()
     if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
         apply_session_query(dash.controls, dash.notify)
+        browser_tuning.install(pn.state.curdoc)
         dash.start_periodic()
 
         def loaded():  # after the first paint

@@ -156,6 +156,12 @@ class MapRegistry:
                 if self._jobs.get(job.spec) is job:
                     del self._jobs[job.spec]
 
+    def viewers(self) -> int:
+        """Sessions following a map now (each session follows one): the server's load, by which
+        the sessions space out their map polls and redraws (:meth:`app.map_view.MapView.load_factor`)."""
+        with self._lock:
+            return sum(len(j.subscribers) for j in self._jobs.values())
+
     def related(self, spec: MapSpec) -> dict:
         """``{fidelity: job}`` of the known jobs for ``spec`` at every fidelity (``spec``'s own included)."""
         out = {}

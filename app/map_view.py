@@ -4,12 +4,18 @@ Cells come from the session's subscription to the server-wide :class:`app.map_jo
 (stored cells at once, new ones as they finish); a progress bar counts them. The current
 (CG, GJ) is a star; the critical-GJ lines of every fidelity computed so far for the same case are
 overlaid with a legend. Clicking the map loads the nearest cell's (CG, GJ) into the controls.
+
+Redraws are spaced: a redraw of the cells re-renders the HoloViews overlay, which recomputes the
+references of every model of the session's document (about 0.1 s of the server's event loop,
+shared by all sessions), so new cells are drawn at most every :data:`REDRAW_S` seconds times the
+load factor (the number of sessions following a map, halved), and at once when the map is done.
 """
 from __future__ import annotations
 
 import csv
 import io
 import math
+import time
 
 import holoviews as hv
 import numpy as np
@@ -26,6 +32,7 @@ CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "
 FIDELITY_STYLE = {"rigid": ("#1565c0", "solid"), "fem-torsion": ("#ef6c00", "dashed"),
                   "fem-coupled": ("#6a1b9a", "dotdash")}
 Marker = Stream.define("Marker", cg_pct=40.0, gj=1500.0)
+REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the cells on an idle server [s]
 
 
 def cells_frame(cells) -> pd.DataFrame:
@@ -71,6 +78,15 @@ class MapView(pn.viewable.Viewer):
                                                bar_color="info")
         self.status = pn.pane.Markdown("Map: waiting ...", name="map-status")
         self._lines_key = None
+        self._undrawn = False  #: cells received but not drawn yet
+        self._drawn_at = -1e9
+
+    def load_factor(self) -> float:
+        """1 on a server with one or two sessions following maps, n/2 with n sessions."""
+        try:
+            return max(1.0, self.registry.viewers() / 2.0)
+        except Exception:  # noqa: BLE001 - a registry stand-in without viewers()
+            return 1.0
 
     # -- subscription
     def follow(self, spec: MapSpec) -> None:
@@ -80,6 +96,7 @@ class MapView(pn.viewable.Viewer):
         self.job = self.registry.subscribe(spec, self.who)
         self.seen = 0
         self.cells = []
+        self._undrawn = False
         self.pipe.send(cells_frame([]))
         self.progress.value = 0
 
@@ -100,6 +117,11 @@ class MapView(pn.viewable.Viewer):
         if snap["cells"]:
             self.cells.extend(snap["cells"])
             self.seen = snap["n"]
+            self._undrawn = True
+        now = time.monotonic()
+        if self._undrawn and (snap["state"] != "running" or now - self._drawn_at >= REDRAW_S * self.load_factor()):
+            self._undrawn = False
+            self._drawn_at = now
             self.pipe.send(cells_frame(self.cells))
         total = max(snap["total"], 1)
         pct = 100 if snap["state"] == "done" else min(99, int(100 * snap["n"] / total))

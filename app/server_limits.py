@@ -11,6 +11,8 @@ disk never stops the server, and a fair, bounded queue of map jobs.
   "busy, N maps queued" instead of stalling. Jobs are already one per map specification (sessions
   asking for the same parameters share one), and a session follows one map at a time, so the
   queue is fair across sessions.
+* :class:`StreamBudget`: the live-plot updates per second the whole server sends, shared evenly by
+  the sessions that stream (each update costs the event loop a few ms, whoever watches).
 """
 from __future__ import annotations
 
@@ -135,3 +137,59 @@ def stream_period_ms(default: int) -> int:
     except ValueError:
         return default
     return v if 20 <= v <= 2000 else default
+
+
+DEFAULT_STREAM_BUDGET_HZ = 160.0  #: live-plot updates per second for the whole server, by default
+
+
+def stream_budget_hz(default: float = DEFAULT_STREAM_BUDGET_HZ) -> float:
+    """``AMRA_STREAM_BUDGET_HZ`` (10..10000), else ``default``."""
+    import os
+    try:
+        v = float(os.environ.get("AMRA_STREAM_BUDGET_HZ", ""))
+    except ValueError:
+        return default
+    return v if 10.0 <= v <= 10000.0 else default
+
+
+class StreamBudget:
+    """The server's live-plot updates per second, shared by the sessions streaming a run.
+
+    With ``n`` sessions streaming, each sends an update at most every ``n / total_hz`` seconds
+    (:meth:`min_interval_s`): 160 /s serves 8 sessions at the full chunk rate (about 17 /s), 16 at
+    10 /s, 32 at 5 /s, and the event loop's share spent on streaming stays bounded. A session's
+    browser that draws more slowly gets fewer (flow control, :mod:`app.streams`)."""
+
+    def __init__(self, total_hz: float = DEFAULT_STREAM_BUDGET_HZ):
+        self.total_hz = float(total_hz)
+        self._lock = threading.Lock()
+        self._streaming: set = set()
+
+    def join(self, who) -> None:
+        with self._lock:
+            self._streaming.add(who)
+
+    def leave(self, who) -> None:
+        with self._lock:
+            self._streaming.discard(who)
+
+    @property
+    def streaming(self) -> int:
+        with self._lock:
+            return len(self._streaming)
+
+    def min_interval_s(self) -> float:
+        """Shortest wall-clock interval between one session's updates now [s]."""
+        return self.streaming / self.total_hz
+
+
+STREAM_BUDGET_KEY = "amra-stream-budget"
+
+
+def get_stream_budget() -> StreamBudget:
+    """The process-wide budget (``pn.state.cache``), created on first use."""
+    import panel as pn
+    budget = pn.state.cache.get(STREAM_BUDGET_KEY)
+    if budget is None:
+        budget = pn.state.cache.setdefault(STREAM_BUDGET_KEY, StreamBudget(stream_budget_hz()))
+    return budget

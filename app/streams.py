@@ -13,6 +13,17 @@ The columns are the plotted quantities in display units; ``gj_nm2`` is the GJ th
 each row, so a mid-run change is visible in the data (and in the rotor-speed hover). The window
 is the last :data:`BUFFER_ROWS` rows (120 s at 200 rows/s); the full-resolution history is kept by
 the Simulation and exported as CSV. (The previous-run overlay is in :mod:`app.ladder`.)
+
+Flow control (:meth:`TimeHistories.enable_flow_control`, on in a served session): the browser
+confirms the streamed batches once it has drawn them (a ``streaming`` callback counts them, waits
+for the next animation frame, then writes the count to the source's ``tags``, which syncs back),
+and at most :data:`WINDOW_BATCHES` batches are sent unconfirmed; rows that arrive meanwhile are
+sent together. Without it a client slower than
+the stream (a loaded machine, eight browsers on two cores) fell ever further behind: at eight
+sessions the newest point reached the screen 50 s after it was computed, and a slider release
+took as long to show. With it each client gets as many updates as it can draw, and a new value
+is at most two drawings behind. A client that does not confirm within :data:`ACK_TIMEOUT_S` (a
+hidden tab draws nothing) is sent the next batch anyway.
 """
 from __future__ import annotations
 
@@ -21,12 +32,30 @@ import math
 import holoviews as hv
 import numpy as np
 import pandas as pd
-from bokeh.models import ColumnDataSource, DataRange1d, HoverTool, Legend
+import time
+
+from bokeh.models import ColumnDataSource, CustomJS, DataRange1d, HoverTool, Legend
 from bokeh.plotting import figure
 
 from amra_core.simulation import COL
 
 BUFFER_ROWS = 24_000  #: 120 s at 200 rows/s
+ACK_TIMEOUT_S = 1.0  #: a batch not confirmed by the browser within this is followed by the next [s]
+
+WINDOW_BATCHES = 3  #: batches sent and not yet confirmed by the browser, at most
+
+#: the browser counts the streamed batches it has applied; after the frame that draws them it
+#: reports the count in ``tags[0]`` (a property change that BokehJS sends back to the server)
+_ACK_JS = """
+cb_obj._amra_applied = (cb_obj._amra_applied || 0) + 1;
+if (cb_obj._amra_ack_due) { return; }
+cb_obj._amra_ack_due = true;
+const confirm = () => {
+  cb_obj._amra_ack_due = false;
+  cb_obj.tags = [cb_obj._amra_applied];
+};
+requestAnimationFrame(() => setTimeout(confirm, 0));
+"""
 
 DIMS = {
     "t_s": hv.Dimension("t_s", label="Time", unit="s"),
@@ -70,16 +99,75 @@ class TimeHistories:
 
     def __init__(self, length: int = BUFFER_ROWS):
         self.length = int(length)
-        self.source = ColumnDataSource({c: np.zeros(0) for c in COLUMNS}, name="amra-time-histories")
+        self.source = ColumnDataSource({c: np.zeros(0) for c in COLUMNS}, name="amra-time-histories", tags=[0])
         self.sent_rows = 0
+        self.batches_sent = 0
+        self.batches_confirmed = 0
+        self.flow_control = False
+        self._pending: list = []
+        self._awaiting_since: float | None = None  #: when the window filled
+        self.min_interval_s = 0.0  #: shortest interval between batches (the server's stream budget) [s]
+        self._sent_at = -1e9
 
-    def send(self, frame: pd.DataFrame) -> None:
+    def enable_flow_control(self) -> None:
+        """Keep at most :data:`WINDOW_BATCHES` batches undrawn in the browser (module docstring)."""
+        if not self.flow_control:
+            self.flow_control = True
+            self.source.js_on_change("streaming", CustomJS(code=_ACK_JS))
+            self.source.on_change("tags", self._confirmed)
+
+    def _confirmed(self, attr, old, new) -> None:
+        try:
+            count = int(new[0])
+        except (TypeError, ValueError, IndexError):
+            return  # not a count: ignore it
+        if count > self.batches_confirmed:
+            self.batches_confirmed = min(count, self.batches_sent)
+            self._awaiting_since = None
+
+    @property
+    def in_flight(self) -> int:
+        """Batches sent that the browser has not confirmed drawing."""
+        return self.batches_sent - self.batches_confirmed
+
+    def send(self, frame: pd.DataFrame) -> int:
+        """Queue ``frame``'s rows and send what is queued if the browser is ready (see
+        :meth:`flush`); returns the number of rows sent now."""
         if len(frame):
-            self.source.stream({c: frame[c].to_numpy(dtype=float) for c in COLUMNS}, rollover=self.length)
-            self.sent_rows += len(frame)
+            self._pending.append(frame)
+        return self.flush()
+
+    def flush(self, now: float | None = None) -> int:
+        """Send the queued rows as one batch, unless flow control waits for the browser to confirm
+        earlier batches (:data:`WINDOW_BATCHES` are unconfirmed; then one batch per
+        :data:`ACK_TIMEOUT_S`); returns the number of rows sent."""
+        if not self._pending:
+            return 0
+        now = time.monotonic() if now is None else now
+        if now - self._sent_at < self.min_interval_s:
+            return 0
+        if self.flow_control and self.in_flight >= WINDOW_BATCHES:
+            if self._awaiting_since is None:
+                self._awaiting_since = now
+            if now - self._awaiting_since < ACK_TIMEOUT_S:
+                return 0
+            self._awaiting_since = now  # no confirmation for a while (a hidden tab draws nothing): one batch
+        frame = pd.concat(self._pending, ignore_index=True) if len(self._pending) > 1 else self._pending[0]
+        self._pending = []
+        self.source.stream({c: frame[c].to_numpy(dtype=float) for c in COLUMNS}, rollover=self.length)
+        self.sent_rows += len(frame)
+        self.batches_sent += 1
+        self._sent_at = now
+        return len(frame)
+
+    @property
+    def pending_rows(self) -> int:
+        """Rows queued, not yet sent (waiting for the browser)."""
+        return sum(len(f) for f in self._pending)
 
     def clear(self) -> None:
         """Empty the live plots (a new run starts)."""
+        self._pending = []
         self.source.data = {c: np.zeros(0) for c in COLUMNS}
         self.sent_rows = 0
 

@@ -35,7 +35,8 @@ command line, where ``ps`` shows it). Secrets reach Panel through its environmen
 
 The app reads its settings from the environment of the server process: ``AMRA_STORE``,
 ``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S`` (and, passed through unchanged,
-``AMRA_STREAM_PERIOD_MS``: each session's page-update period [ms], default 50).
+``AMRA_STREAM_PERIOD_MS``: each session's page-update period [ms], default 25; and
+``AMRA_STREAM_BUDGET_HZ``: live-plot updates per second for the whole server, default 160).
 """
 from __future__ import annotations
 

@@ -77,6 +77,11 @@ def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_se
     after = wait_for(lambda: streamed(page)[2] != 1500 and streamed(page), 60, what="points with the new GJ")
     assert after[2] < 1500 and after[1] > before[1]  # the same run continued with a softer blade
     assert d.controls.gj_nm2 == after[2] and d.worker.running
+    # flow control: the browser confirmed the batches it drew (at most two in flight, and a batch
+    # sent on the 1 s timeout is the exception)
+    h = d.histories
+    assert h.flow_control and h.batches_confirmed >= 5, (h.batches_sent, h.batches_confirmed)
+    assert h.batches_confirmed >= 0.8 * h.batches_sent - 1, (h.batches_sent, h.batches_confirmed)
     expect(page.get_by_text("applied live at t =").first).to_be_visible(timeout=10_000)
     shot(page, "03-gj-changed-mid-run")
     page.locator(".amra-stop button").click()

@@ -1,0 +1,114 @@
+"""The live plots' data source: rows in order, and flow control (at most WINDOW_BATCHES batches the
+browser has not confirmed drawing; then one batch per ACK_TIMEOUT_S)."""
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from amra_core.simulation import HISTORY_COLUMNS
+from app.server_limits import StreamBudget
+from app.streams import ACK_TIMEOUT_S, WINDOW_BATCHES, TimeHistories, frame_from_rows
+
+
+def _frame(t0: float, n: int, gj: float = 1500.0):
+    rows = np.zeros((n, len(HISTORY_COLUMNS)))
+    rows[:, HISTORY_COLUMNS.index("t_s")] = t0 + 0.005 * np.arange(n)
+    return frame_from_rows(rows, gj)
+
+
+def test_without_flow_control_every_batch_is_sent_at_once():
+    h = TimeHistories()
+    assert h.send(_frame(0.0, 5)) == 5 and h.send(_frame(0.025, 5)) == 5
+    assert h.pending_rows == 0 and len(h.frame()) == 10 and h.batches_sent == 2
+
+
+def test_a_batch_waits_for_the_browser_to_draw_the_last_ones():
+    h = TimeHistories()
+    h.enable_flow_control()
+    assert "streaming" in h.source.js_property_callbacks  # the browser side of the handshake
+    assert [h.send(_frame(0.005 * 5 * k, 5)) for k in range(WINDOW_BATCHES)] == [5] * WINDOW_BATCHES
+    assert h.in_flight == WINDOW_BATCHES
+    t_next = 0.025 * WINDOW_BATCHES
+    assert h.send(_frame(t_next, 4)) == 0 and h.send(_frame(t_next + 0.02, 3)) == 0  # window full: queued
+    assert h.pending_rows == 7 and len(h.frame()) == 5 * WINDOW_BATCHES
+    h.source.tags = [1]  # what the browser's callback reports once the first batch is on screen
+    assert h.batches_confirmed == 1 and h.in_flight == WINDOW_BATCHES - 1
+    assert h.flush() == 7  # the queued rows go as one batch
+    t = h.frame()["t_s"].to_numpy()
+    assert len(t) == 5 * WINDOW_BATCHES + 7 and np.all(np.diff(t) > 0)  # nothing lost, nothing reordered
+    h.source.tags = [h.batches_sent]  # all drawn
+    assert h.in_flight == 0
+    h.source.tags = ["nonsense"]  # not a count: ignored
+    h.source.tags = [10 ** 6]  # never more confirmed than sent
+    assert h.in_flight == 0 and h.batches_confirmed == h.batches_sent
+
+
+def test_a_browser_that_never_confirms_gets_one_batch_per_timeout():
+    h = TimeHistories()
+    h.enable_flow_control()
+    for k in range(WINDOW_BATCHES):
+        h.send(_frame(0.025 * k, 5))
+    t0 = time.monotonic()
+    assert h.send(_frame(0.025 * WINDOW_BATCHES, 5)) == 0
+    assert h.flush(now=t0 + 0.5 * ACK_TIMEOUT_S) == 0
+    assert h.flush(now=t0 + ACK_TIMEOUT_S + 0.01) == 5
+    h.send(_frame(0.025 * WINDOW_BATCHES + 0.1, 5))
+    assert h.flush(now=t0 + 1.5 * ACK_TIMEOUT_S) == 0  # the next one a timeout later
+    assert h.flush(now=t0 + 2 * ACK_TIMEOUT_S + 0.02) == 5
+
+
+def test_clear_drops_what_is_queued_for_the_old_run():
+    h = TimeHistories()
+    h.enable_flow_control()
+    for k in range(WINDOW_BATCHES + 1):
+        h.send(_frame(0.025 * k, 5))
+    assert h.pending_rows == 5
+    h.clear()
+    assert h.pending_rows == 0 and len(h.frame()) == 0
+
+
+def test_the_stream_budget_shares_the_servers_updates_among_streaming_sessions():
+    budget = StreamBudget(total_hz=100.0)
+    for who in range(10):
+        budget.join(who)
+    budget.join(3)
+    assert budget.streaming == 10 and budget.min_interval_s() == pytest.approx(0.1)
+    budget.leave(3)
+    budget.leave(3)
+    assert budget.streaming == 9
+    h = TimeHistories()
+    h.min_interval_s = 0.1
+    assert h.send(_frame(0.0, 5)) == 5
+    t_sent = time.monotonic()
+    assert h.send(_frame(0.025, 5)) == 0 and h.pending_rows == 5  # too soon after the last batch
+    assert h.flush(now=t_sent + 0.11) == 5
+
+
+@pytest.fixture
+def dash(server_settings, analysis_pool):
+    from app.dashboard import Dashboard
+    d = Dashboard(server_settings, registry=None, pool=analysis_pool)
+    yield d
+    d.close()
+
+
+def test_a_session_joins_the_budget_while_it_streams(dash, wait):
+    dash.budget = StreamBudget(total_hz=100.0)
+    dash.controls.param.update(run_s=1.0, speed=4.0)
+    dash.start_run()
+
+    def step():
+        dash.pump()
+        return dash.budget.streaming == 1
+    wait(step, 60, what="the session to join the budget")
+    assert dash.histories.min_interval_s == pytest.approx(0.01)
+
+    def finished():
+        dash.pump()
+        return dash.last_history is not None and not dash.worker.running
+    wait(finished, 60, what="the run's end")
+    dash.pump()
+    dash.pump()
+    assert dash.budget.streaming == 0 and dash.histories.min_interval_s == 0.0
