@@ -121,7 +121,12 @@ def main() -> int:
             _, idle_fps = page.evaluate(JS_RATE, 2.0)
             page.locator(".amra-run button").click()
             page.wait_for_function(f"() => {{ const s = ({JS_LAST})(); return s && s[1] > 2.0; }}", timeout=120_000)
+            h = sessions[-1].histories
+            sent0, confirmed0, pushed0, t_server0 = h.batches_sent, h.batches_confirmed, h.sent_rows, time.monotonic()
             rate, fps = page.evaluate(JS_RATE, args.window)
+            span = time.monotonic() - t_server0
+            server_rates = ((h.batches_sent - sent0) / span, (h.batches_confirmed - confirmed0) / span,
+                            (h.sent_rows - pushed0) / span)
             lat = []
             for i in range(args.repeats):
                 old = page.evaluate(JS_LAST)[2]
@@ -140,6 +145,8 @@ def main() -> int:
           f"slider release -> first new point: not seen ({lat})")
     print(f"plot updates per second while streaming: {rate:.1f} /s (over {args.window:g} s; the browser drew "
           f"{fps:.0f} frames/s; {idle_fps:.0f} before the run)")
+    print(f"server side: {server_rates[0]:.1f} batches/s sent, {server_rates[1]:.1f} /s confirmed drawn by the "
+          f"browser, {server_rates[2]:.0f} rows/s")
     print(f"machine load average: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     return 0
 

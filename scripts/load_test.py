@@ -112,6 +112,24 @@ def tree_rss_mb(pid: int) -> float:
     return total / 1e6
 
 
+def cpu_seconds_of(match: str) -> float:
+    """CPU time [s] used so far by every process whose command line contains ``match``."""
+    total = 0
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/cmdline", "rb") as f:
+                if match.encode() not in f.read():
+                    continue
+            with open(f"/proc/{d}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += int(fields[11]) + int(fields[12])  # utime + stime [clock ticks]
+        except (OSError, ValueError, IndexError):
+            pass
+    return total / os.sysconf("SC_CLK_TCK")
+
+
 class Server:
     """``amra serve`` in its own process group on a free port, with a fresh store."""
 
@@ -251,10 +269,12 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         browser = await p.chromium.launch(**launch)
         sampler = asyncio.create_task(sample())
         t0 = time.monotonic()
+        client_cpu0 = cpu_seconds_of("chromium")
         sep = "&" if "?" in url else "?"
         results = await asyncio.gather(*[session(browser, f"{url}{sep}run_s={run_s:g}", moves, timeout_s, i,
                                                  stagger_s) for i in range(n)])
         wall = time.monotonic() - t0
+        client_cpu = cpu_seconds_of("chromium") - client_cpu0
         rss_open = server.rss_mb() if server else None
         for r in results:
             try:
@@ -267,11 +287,15 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         await browser.close()
     lat = [x for r in results for x in r["latencies_s"]]
     firsts = [r["run_first_s"] for r in results if r["run_first_s"] is not None]
+    loads = [r["load_s"] for r in results if r["load_s"] is not None]
     errors = [e for r in results for e in r["errors"]]
     out = {"sessions": n, "moves": len(lat), "p50_s": _pct(lat, 0.5), "p95_s": _pct(lat, 0.95),
            "max_s": max(lat) if lat else None, "run_first_p50_s": _pct(firsts, 0.5),
-           "run_first_p95_s": _pct(firsts, 0.95), "errors": len(errors), "error_samples": errors[:5],
-           "wall_s": round(wall, 1)}
+           "run_first_p95_s": _pct(firsts, 0.95), "load_p50_s": _pct(loads, 0.5), "load_p95_s": _pct(loads, 0.95),
+           "errors": len(errors), "error_samples": errors[:5],
+           "wall_s": round(wall, 1),
+           # the browsers' share of this machine (they run beside the server on the same cores)
+           "client_cpu_cores": round(client_cpu / wall, 2), "machine_cores": os.cpu_count()}
     if server:
         out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
                     "rss_sessions_open_mb": round(rss_open, 1),
