@@ -9,6 +9,7 @@ map subscription (:meth:`Dashboard.close`).
 """
 from __future__ import annotations
 
+import logging
 import queue
 import time
 from typing import Optional
@@ -41,6 +42,7 @@ MAP_POLL_S = 0.4  #: wall-clock period of the map poll [s], times the map's load
 CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)
+log = logging.getLogger("amra.dashboard")
 
 
 class Dashboard(pn.viewable.Viewer):
@@ -73,6 +75,8 @@ class Dashboard(pn.viewable.Viewer):
         self._next_pump = 0.0
         self._next_map_poll = 0.0
         self.budget = None  #: the server's StreamBudget, in a served session (start_periodic)
+        self._live_since: Optional[tuple] = None  #: (GJ, perf_counter) of a live change not yet streamed
+        self.live_latencies_s: list = []  #: server side: live change received -> first rows with it sent [s]
         self._in_budget = False
         self._period_s = PUMP_MS / 1000.0
         self._locus_key = None
@@ -156,6 +160,7 @@ class Dashboard(pn.viewable.Viewer):
     # ------------------------------------------------------------------ parameter changes
     def _on_live(self, *events) -> None:
         if self.worker.running:
+            self._live_since = (float(self.controls.gj_nm2), time.perf_counter())
             self.worker.set_live(**self.controls.live_values())
             self.live_note.object = (f"applied live at the next chunk: GJ {self.controls.gj_nm2:.4g} N m²/rad, "
                                      f"EA {self.controls.ea_pct:g} %, CG {self.controls.cg_pct:g} %")
@@ -294,6 +299,13 @@ class Dashboard(pn.viewable.Viewer):
             self.fan.set_omega(float(frame["omega_rad_s"].iloc[-1]))
         else:
             n = self.histories.flush()
+        if n and self._live_since is not None:
+            gj, since = self._live_since
+            if abs(self.histories.last_sent_gj - gj) <= 1e-9 * gj:
+                self._live_since = None
+                self.live_latencies_s.append(time.perf_counter() - since)
+                log.info("live change to GJ %.4g N m²/rad: first rows with it sent %.3f s after it reached "
+                         "the server", gj, self.live_latencies_s[-1])
         self._ticks += 1
         now = time.perf_counter()
         if self.map is not None and now >= self._next_map_poll:

@@ -101,6 +101,7 @@ class TimeHistories:
         self.length = int(length)
         self.source = ColumnDataSource({c: np.zeros(0) for c in COLUMNS}, name="amra-time-histories", tags=[0])
         self.sent_rows = 0
+        self.last_sent_gj = float("nan")  #: GJ of the newest row sent [N m²/rad]
         self.batches_sent = 0
         self.batches_confirmed = 0
         self.flow_control = False
@@ -156,6 +157,7 @@ class TimeHistories:
         self._pending = []
         self.source.stream({c: frame[c].to_numpy(dtype=float) for c in COLUMNS}, rollover=self.length)
         self.sent_rows += len(frame)
+        self.last_sent_gj = float(frame["gj_nm2"].iloc[-1])
         self.batches_sent += 1
         self._sent_at = now
         return len(frame)

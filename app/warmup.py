@@ -35,6 +35,13 @@ def warm() -> float:
 
 if __name__ in ("panel_setup_module", "__main__"):
 
+    import logging  # noqa: E402
+    import os  # noqa: E402
+
+    # the app's loggers ("amra.*", e.g. the server-side latency of live changes) at the server's level
+    level = {"trace": "DEBUG"}.get(os.environ.get("AMRA_LOG_LEVEL", "info"), os.environ.get("AMRA_LOG_LEVEL", "info"))
+    logging.getLogger("amra").setLevel(level.upper())
+
     from app.analysis import warm_worker  # noqa: E402
     from app.background import get_analysis_pool  # noqa: E402
     from app.map_jobs import get_registry  # noqa: E402

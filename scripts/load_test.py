@@ -9,7 +9,10 @@ case share one map job). Measured, in each page with ``performance.now()``:
   was computed with the new GJ (the live plot's data carries the GJ of every row);
 * run start: from the Run click to the first streamed point;
 * errors: page exceptions, console errors, an error alert in the page, a websocket that closed,
-  timeouts.
+  timeouts;
+* the server's share of the slider latency: from the change reaching the server to the first rows
+  computed with it leaving the server (from the server's log), and the browsers' CPU share, since
+  here the browsers run on the server's own cores.
 
 The server (``amra serve``, fresh store per session count) is started by the script unless
 ``--url`` is given; its memory (RSS of the whole process tree) is sampled before the sessions and
@@ -166,6 +169,13 @@ class Server:
         except OSError:
             return 0.0
 
+    def live_latencies_s(self) -> list:
+        """Server side of each slider move: the change received -> first rows with it sent [s]
+        (logged by app.dashboard at info level)."""
+        import re
+        text = Path(self.dir, "serve.log").read_text(errors="replace")
+        return [float(x) for x in re.findall(r"first rows with it sent ([0-9.]+) s after", text)]
+
     def stop(self) -> None:
         for sig in (signal.SIGTERM, signal.SIGKILL):
             try:
@@ -297,6 +307,9 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
            # the browsers' share of this machine (they run beside the server on the same cores)
            "client_cpu_cores": round(client_cpu / wall, 2), "machine_cores": os.cpu_count()}
     if server:
+        srv_lat = server.live_latencies_s()
+        out.update({"server_side_moves": len(srv_lat), "server_side_p50_s": _pct(srv_lat, 0.5),
+                    "server_side_p95_s": _pct(srv_lat, 0.95)})
         out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
                     "rss_sessions_open_mb": round(rss_open, 1),
                     "server_rss_base_mb": round(main0, 1), "server_rss_peak_mb": round(peak_main[0], 1),

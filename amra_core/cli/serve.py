@@ -250,6 +250,7 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
     # unless the mode is also set in the environment (measured: every page of 8 concurrent
     # sessions fetched cdn.holoviz.org without it)
     env.setdefault("BOKEH_RESOURCES", "server")
+    env["AMRA_LOG_LEVEL"] = s["log_level"]  # the app's own loggers ("amra.*") follow it (app/warmup.py)
     # Numba: only a thread-safe layer (OpenMP from libgomp1, or TBB) when threads share kernels
     env.setdefault("NUMBA_THREADING_LAYER", "safe")
     return argv, env

@@ -52,6 +52,8 @@ def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     first_new = data[data["gj_nm2"] == 700.0]["t_s"].iloc[0]
     assert first_new > t_change and np.all(np.diff(data["t_s"]) > 0)  # the same run, continuing
     assert "applied live" in dash.live_note.object
+    # the server's share of the slider latency is measured (change received -> first rows sent)
+    assert len(dash.live_latencies_s) == 1 and 0.0 < dash.live_latencies_s[0] < 30.0
     dash.stop_run()
 
 
