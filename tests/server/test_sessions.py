@@ -223,11 +223,10 @@ def test_map_through_a_dask_cluster_beside_the_server(amra_server, chromium_args
 
 
 @pytest.mark.xfail(strict=False, reason=(
-    "issue 11 target not met on the 2-core machine (8 Chromiums and the server share 2 cores): at N = 8 "
-    "(idle machine, 2026-12-01 14:00, after the streaming fix) the first streamed point came 48 s (p50) "
-    "after Run and in all 8 pages the GJ slider could not be scrolled into view within 30 s; N = 1 and "
-    "N = 2 pass (slider p95 0.78 s and 1.09 s); kept running so the figures are printed and a fix "
-    "shows as XPASS"))
+    "issue 11 p95 target not met on the 2-core machine, where the 8 Chromiums take 1.4 of its 2 cores: "
+    "on 2026-12-01 16:20-16:45, after flow control, three runs at N = 8 had 0 errors and 16 of 16 "
+    "moves (this test's assertions), but slider p95 41-59 s in the browser (server side p95 6.8 s) "
+    "against 2 s; expected to pass as XPASS, kept as xfail while the latency target is open"))
 def test_load_eight_sessions_no_errors():
     """scripts/load_test.py at N = 8 (the figures are printed; the target p95 <= 2 s is reported,
     not asserted: it depends on the machine)."""
