@@ -16,7 +16,7 @@ the Simulation and exported as CSV. (The previous-run overlay is in :mod:`app.la
 
 Flow control (:meth:`TimeHistories.enable_flow_control`, on in a served session): the browser
 confirms the streamed batches once it has drawn them (a ``streaming`` callback counts them, waits
-for the next animation frame, then writes the count to the source's ``tags``, which syncs back),
+for the next animation frame, then writes the count to the ``tags`` of a small unplotted source, which syncs back),
 and at most :data:`WINDOW_BATCHES` batches are sent unconfirmed; rows that arrive meanwhile are
 sent together. Without it a client slower than
 the stream (a loaded machine, eight browsers on two cores) fell ever further behind: at eight
@@ -45,14 +45,16 @@ ACK_TIMEOUT_S = 1.0  #: a batch not confirmed by the browser within this is foll
 WINDOW_BATCHES = 3  #: batches sent and not yet confirmed by the browser, at most
 
 #: the browser counts the streamed batches it has applied; after the frame that draws them it
-#: reports the count in ``tags[0]`` (a property change that BokehJS sends back to the server)
+#: reports the count in ``tags[0]`` of a separate, unplotted source (a property change that BokehJS
+#: sends back to the server; on the plotted source itself, any property change makes every plot
+#: re-index its data and repaint)
 _ACK_JS = """
 cb_obj._amra_applied = (cb_obj._amra_applied || 0) + 1;
 if (cb_obj._amra_ack_due) { return; }
 cb_obj._amra_ack_due = true;
 const confirm = () => {
   cb_obj._amra_ack_due = false;
-  cb_obj.tags = [cb_obj._amra_applied];
+  ack.tags = [cb_obj._amra_applied];
 };
 requestAnimationFrame(() => setTimeout(confirm, 0));
 """
@@ -99,7 +101,8 @@ class TimeHistories:
 
     def __init__(self, length: int = BUFFER_ROWS):
         self.length = int(length)
-        self.source = ColumnDataSource({c: np.zeros(0) for c in COLUMNS}, name="amra-time-histories", tags=[0])
+        self.source = ColumnDataSource({c: np.zeros(0) for c in COLUMNS}, name="amra-time-histories")
+        self.ack = ColumnDataSource({}, name="amra-stream-ack", tags=[0])  #: the browser's drawn-batch count
         self.sent_rows = 0
         self.last_sent_gj = float("nan")  #: GJ of the newest row sent [N m²/rad]
         self.batches_sent = 0
@@ -114,8 +117,8 @@ class TimeHistories:
         """Keep at most :data:`WINDOW_BATCHES` batches undrawn in the browser (module docstring)."""
         if not self.flow_control:
             self.flow_control = True
-            self.source.js_on_change("streaming", CustomJS(code=_ACK_JS))
-            self.source.on_change("tags", self._confirmed)
+            self.source.js_on_change("streaming", CustomJS(args={"ack": self.ack}, code=_ACK_JS))
+            self.ack.on_change("tags", self._confirmed)
 
     def _confirmed(self, attr, old, new) -> None:
         try:

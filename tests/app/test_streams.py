@@ -33,15 +33,15 @@ def test_a_batch_waits_for_the_browser_to_draw_the_last_ones():
     t_next = 0.025 * WINDOW_BATCHES
     assert h.send(_frame(t_next, 4)) == 0 and h.send(_frame(t_next + 0.02, 3)) == 0  # window full: queued
     assert h.pending_rows == 7 and len(h.frame()) == 5 * WINDOW_BATCHES
-    h.source.tags = [1]  # what the browser's callback reports once the first batch is on screen
+    h.ack.tags = [1]  # what the browser's callback reports once the first batch is on screen
     assert h.batches_confirmed == 1 and h.in_flight == WINDOW_BATCHES - 1
     assert h.flush() == 7  # the queued rows go as one batch
     t = h.frame()["t_s"].to_numpy()
     assert len(t) == 5 * WINDOW_BATCHES + 7 and np.all(np.diff(t) > 0)  # nothing lost, nothing reordered
-    h.source.tags = [h.batches_sent]  # all drawn
+    h.ack.tags = [h.batches_sent]  # all drawn
     assert h.in_flight == 0
-    h.source.tags = ["nonsense"]  # not a count: ignored
-    h.source.tags = [10 ** 6]  # never more confirmed than sent
+    h.ack.tags = ["nonsense"]  # not a count: ignored
+    h.ack.tags = [10 ** 6]  # never more confirmed than sent
     assert h.in_flight == 0 and h.batches_confirmed == h.batches_sent
 
 
