@@ -220,7 +220,7 @@ def rhs(y, dy, m, loads, work):
     for i in range(ns):
         k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
         s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
-        h0x = 0.0; h1x = 0.0; h0xd = 0.0; h1xd = 0.0; v0x = 0.0; v1x = 0.0
+        h0x = 0.0; h0xd = 0.0; v0x = 0.0
         for k in range(ns):
             q = y[x0 + k]; qd = y[xd0 + k]
             k0x += m.k0[i, k] * q
@@ -234,11 +234,10 @@ def rhs(y, dy, m, loads, work):
             i0x += m.li2[0, i, k] * q
             i1x += m.li2[1, i, k] * q
             h0x += m.glh[0, i, k] * q
-            h1x += m.glh[1, i, k] * q
             h0xd += m.glh[0, i, k] * qd
-            h1xd += m.glh[1, i, k] * qd
             v0x += m.uglh[0, i, k] * q
-            v1x += m.uglh[1, i, k] * q
+        # blade 1's parts from the totals (glh[0] + glh[1] = gyh, uglh[0] + uglh[1] = ugyh)
+        h1x = hx - h0x; h1xd = hxd - h0xd; v1x = ux - v0x
         # flap-lag Coriolis: -d/dx of Omega S_b(x) zeta_b' + 1/2 I_b(x) zeta_b'^2
         f = work[i] + om2 * (m.sf[i] - k2x) - k0x - cxd - om * (zd0 * s0x + zd1 * s1x) \
             - zd0 * zd0 * i0x - zd1 * zd1 * i1x
