@@ -225,8 +225,9 @@ def test_map_through_a_dask_cluster_beside_the_server(amra_server, chromium_args
 @pytest.mark.xfail(strict=False, reason=(
     "issue 11 p95 target not met on the 2-core machine, where the 8 Chromiums take 1.4 of its 2 cores: "
     "on 2026-12-01 16:20-16:45, after flow control, three runs at N = 8 had 0 errors and 16 of 16 "
-    "moves (this test's assertions), but slider p95 41-59 s in the browser (server side p95 6.8 s) "
-    "against 2 s; expected to pass as XPASS, kept as xfail while the latency target is open"))
+    "moves (this test's assertions), but in the clean-clone CI run of 17:00 all 8 got no streamed point "
+    "within the script's 60 s (Run -> first point is 47-65 s at N = 8), and slider p95 was 41-59 s in "
+    "the browser (server side p95 6.8 s) against 2 s"))
 def test_load_eight_sessions_no_errors():
     """scripts/load_test.py at N = 8 (the figures are printed; the target p95 <= 2 s is reported,
     not asserted: it depends on the machine)."""
