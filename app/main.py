@@ -12,17 +12,12 @@ import panel as pn
 from app import browser_tuning
 from app.dashboard import Dashboard
 from app.layout import TITLE
+from app.local_resources import serve_resources_locally
 from app.map_jobs import get_registry
 from app.settings import ServerSettings
 from app.url_sync import apply_session_query, sync_url
 
 __all__ = ["TITLE", "create_app"]
-
-
-def serve_resources_locally() -> None:
-    """Bokeh and Panel JS/CSS from this server, never a CDN: the page must work offline."""
-    from bokeh.settings import settings
-    settings.resources.set_value("server")
 
 
 def create_app():

@@ -33,6 +33,19 @@ def test_page_loads_offline_without_console_errors(watched_page, dashboard_url):
     assert page.amra_errors == [], f"console errors: {page.amra_errors}"
 
 
+def test_every_view_tab_opens_offline_without_console_errors(watched_page, dashboard_url):
+    """The views are rendered when their tab is first opened (dynamic tabs); the models built then
+    must take their stylesheets from this server too, not from Panel's CDN."""
+    page = watched_page
+    open_dashboard(page, dashboard_url)
+    for name in ("Modes & root locus", "Rotor disc", "Fan plot", "Fidelity ladder", "Boundary map"):
+        page.locator(".bk-tab", has_text=name).first.click()
+        page.wait_for_timeout(1500)
+        shot(page, "01b-tab-" + re.sub(r"[^a-z]+", "-", name.lower()).strip("-"))
+    assert page.amra_outside == [], f"requests to outside hosts: {page.amra_outside}"
+    assert page.amra_errors == [], f"console errors: {page.amra_errors}"
+
+
 def test_a_run_streams_points_into_the_plots(watched_page, dashboard_url):
     page = watched_page
     open_dashboard(page, dashboard_url + "?run_s=4&speed=1")
