@@ -153,6 +153,13 @@ def evaluate(y, m, dy, loads):
     return kernels.evaluate(y, m, dy, loads)
 
 
+def jacobian(y0, m, J):
+    """:func:`kernels.jacobian` (the whole finite-difference Jacobian) after the shape checks, once."""
+    _, _, n_y = check_state(y0, m)
+    _shape("Jacobian J", J, (n_y - 1, n_y - 1))
+    return kernels.jacobian(y0, m, J)
+
+
 def station_loads(y, m, out):
     """:func:`kernels.station_loads` after the shape checks (``out`` is (2, n_st, 5))."""
     _, nst, _ = check_state(y, m)

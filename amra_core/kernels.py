@@ -17,7 +17,7 @@ import numpy as np
 
 from .airfoil import airfoil_coefficients
 from .jit import inline_kernel, kernel
-from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_Y_FIXED, P_A_SOUND,
+from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
                     P_VH, S_A, S_C, S_R,
@@ -462,6 +462,26 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
             status = 2
             break
     return done, rows, status
+
+
+@kernel
+def jacobian(y0, m, J):
+    """``J`` (n - 1, n - 1) = df/dy without the azimuth row and column, by central differences with
+    the relative step 1e-6 (the same arithmetic as n - 1 pairs of :func:`evaluate`, in one call)."""
+    n = y0.shape[0]
+    work = np.empty(4 * int(m.p[P_NS]) + 2)
+    loads = np.zeros(N_LOADS)
+    dy_p = np.zeros(n); dy_m = np.zeros(n)
+    y = y0.copy()
+    for i in range(1, n):
+        h = 1e-6 * max(1.0, abs(y0[i]))
+        y[i] = y0[i] + h
+        rhs(y, dy_p, m, loads, work)
+        y[i] = y0[i] - h
+        rhs(y, dy_m, m, loads, work)
+        y[i] = y0[i]
+        for k in range(1, n):
+            J[k - 1, i - 1] = (dy_p[k] - dy_m[k]) / (2 * h)
 
 
 @kernel

@@ -11,6 +11,7 @@ wagner(2 blades x n_st x 2)]`` with ``x = [beta, q_blade0, q_blade1]`` (:mod:`am
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
@@ -20,7 +21,7 @@ from .airfoil import compile_airfoil, load_airfoil
 from .flight import FlightCondition, SolverSettings
 from .rotor import Rotor
 from .shapes import make_mesh
-from .structure import assemble
+from .structure import assemble, torsion_stiffness
 
 # --- scalar parameter slots (indices into ModelArrays.p) -------------------------------------
 P_RHO, P_A_SOUND, P_G, P_MASS, P_R, P_R0, P_VH, P_ALPHA_S = range(8)
@@ -186,10 +187,68 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     """Compile a case. ``vacuum=True`` (conservation tests): no aerodynamic loads and no apparent
     mass, descent rate and inflow frozen, so only the rotor's own mechanics remain (with the rotor
     speed free, total energy and angular momentum about the shaft are then conserved, see
-    :func:`mechanical_energy`)."""
+    :func:`mechanical_energy`).
+
+    GJ enters only the torsional stiffness, so everything else (the structure without it, the
+    stations, the shapes, the airfoil) is compiled once per rotor-without-GJ and reused
+    (:func:`_gj_free_parts`, a small per-process cache): a column walk or a GJ slider compiles
+    only the stiffness, its reduction and the projections. Every array handed to the kernels is
+    the model's own."""
+    parts = _gj_free_parts(rotor.with_overrides(gj_nm2=1.0), flight, settings, vacuum)
+    mesh, s0 = parts.mesh, parts.structure
+    s = replace(s0, K0=s0.K0 + torsion_stiffness(rotor, mesh))
+    R = rotor.radius_m
+    zeta = rotor.structural_damping_ratio
+    phi, phi_pinv, minv, k0, k2 = _reduction(s, settings, omega_ref_rad_s=150.0 / R)
+    shw, shd, sht = parts.shw @ phi, parts.shd @ phi, parts.sht @ phi
+    tip, teeter = parts.tip @ phi, parts.teeter @ phi
+    af = parts.airfoil
+    own = np.array  # a fresh, writable, contiguous copy: nothing a kernel gets is shared
+    p = own(parts.p)
+    p[P_NS] = phi.shape[1]
+    arrays = ModelArrays(
+        p=p, minv=own(minv), k0=own(k0), k2=own(k2), c=phi.T @ structural_damping(s, zeta) @ phi,
+        st=own(parts.st), shw=own(shw), shd=own(shd), sht=own(sht), tip=own(tip), teeter=own(teeter),
+        lag_inv=own(parts.lag_inv), af_alpha0=af.alpha0_rad, af_dalpha=af.dalpha_rad, af_cl=own(af.cl),
+        af_cd=own(af.cd), af_cm=own(af.cm),
+        sf=np.ascontiguousarray(phi.T @ s.f), gy0=np.ascontiguousarray(phi.T @ s.g0),
+        gyh=np.ascontiguousarray(phi.T @ s.H @ phi), ugy0=np.ascontiguousarray(minv @ (phi.T @ s.g0)),
+        ugyh=np.ascontiguousarray(minv @ (phi.T @ s.H @ phi)),
+        ls2=np.ascontiguousarray(np.array([phi.T @ s.S2[b] @ phi for b in range(2)])),
+        li2=np.ascontiguousarray(np.array([phi.T @ s.I2[b] @ phi for b in range(2)])),
+        gl0=np.ascontiguousarray(np.array([phi.T @ s.gl0[b] for b in range(2)])),
+        glh=np.ascontiguousarray(np.array([phi.T @ s.HL[b] @ phi for b in range(2)])),
+        ugl0=np.ascontiguousarray(np.array([minv @ (phi.T @ s.gl0[b]) for b in range(2)])),
+        uglh=np.ascontiguousarray(np.array([minv @ (phi.T @ s.HL[b] @ phi) for b in range(2)])),
+    )
+    return CompiledModel(arrays, mesh.n_q, phi.shape[1], parts.st.shape[0], s.kinds, s, phi, phi_pinv, rotor,
+                         flight, settings)
+
+
+class _GjFreeParts(NamedTuple):
+    """What :func:`compile_model` needs that does not depend on GJ (read-only: shared by models)."""
+
+    mesh: object
+    structure: object  #: :class:`~amra_core.structure.RotorStructure` without the torsional stiffness
+    st: np.ndarray
+    p: np.ndarray
+    shw: np.ndarray
+    shd: np.ndarray
+    sht: np.ndarray
+    tip: np.ndarray
+    teeter: np.ndarray
+    lag_inv: np.ndarray
+    airfoil: object
+
+
+@functools.lru_cache(maxsize=16)
+def _gj_free_parts(rotor: Rotor, flight: FlightCondition, settings: SolverSettings, vacuum: bool) -> _GjFreeParts:
+    """The GJ-independent parts of a compiled model, for a rotor whose GJ does not matter (the
+    caller passes it with GJ 1). Measured on a rigid axial column walk (paper-boundary, 40 trims):
+    the structure assembly and the airfoil resampling were 43 % of the walk's time."""
     mesh = make_mesh(settings.fidelity, rotor.root_cutout_m, rotor.radius_m, settings.n_elements)
     rho = flight.density_kg_m3
-    s = assemble(rotor, mesh, added_mass=None if vacuum else apparent_mass(rotor, rho))
+    s = assemble(rotor, mesh, added_mass=None if vacuum else apparent_mass(rotor, rho), torsion=False)
     st_ = rotor.stations
 
     gx, gw = np.polynomial.legendre.leggauss(settings.n_stations)
@@ -216,9 +275,6 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
         tip[b, 0, 0] = sgn * R
         tip[b, 0, cols] = tw[0]; tip[b, 1, cols] = tt[0]
     teeter = np.zeros(n_full); teeter[0] = 1.0
-    phi, phi_pinv, minv, k0, k2 = _reduction(s, settings, omega_ref_rad_s=150.0 / R)
-    shw, shd, sht = shw @ phi, shd @ phi, sht @ phi
-    tip, teeter = tip @ phi, teeter @ phi
 
     p = np.zeros(N_P)
     p[P_RHO] = rho
@@ -230,7 +286,7 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_VH] = flight.airspeed_m_s
     p[P_AERO] = 1.0 if settings.aero == "theodorsen" else 0.0
     p[P_IR], p[P_ILAG], p[P_SLAG], p[P_KLAG], p[P_K2LAG] = s.I_R, s.I_lag, s.S_lag, s.k_lag, s.k2_lag
-    p[P_NQ], p[P_NST], p[P_NS] = mesh.n_q, len(r), phi.shape[1]
+    p[P_NQ], p[P_NST] = mesh.n_q, len(r)
     zeta = rotor.structural_damping_ratio
     p[P_INFLOW3] = 1.0 if settings.inflow == "three-state" else 0.0
     p[P_VACUUM] = 1.0 if vacuum else 0.0
@@ -238,22 +294,11 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_CLAG] = 2.0 * zeta * np.sqrt(s.k_lag * s.I_lag)  # blade lag mode clamped at the hub
     lag_m = np.array([[s.I_R, s.S_lag, s.S_lag], [s.S_lag, s.I_lag, 0.0], [s.S_lag, 0.0, s.I_lag]])
     af = compile_airfoil(load_airfoil(rotor.airfoil))
-    arrays = ModelArrays(
-        p=p, minv=minv, k0=k0, k2=k2, c=phi.T @ structural_damping(s, zeta) @ phi, st=st,
-        shw=np.ascontiguousarray(shw), shd=np.ascontiguousarray(shd), sht=np.ascontiguousarray(sht),
-        tip=np.ascontiguousarray(tip), teeter=np.ascontiguousarray(teeter), lag_inv=np.linalg.inv(lag_m),
-        af_alpha0=af.alpha0_rad, af_dalpha=af.dalpha_rad, af_cl=af.cl, af_cd=af.cd, af_cm=af.cm,
-        sf=np.ascontiguousarray(phi.T @ s.f), gy0=np.ascontiguousarray(phi.T @ s.g0),
-        gyh=np.ascontiguousarray(phi.T @ s.H @ phi), ugy0=np.ascontiguousarray(minv @ (phi.T @ s.g0)),
-        ugyh=np.ascontiguousarray(minv @ (phi.T @ s.H @ phi)),
-        ls2=np.ascontiguousarray(np.array([phi.T @ s.S2[b] @ phi for b in range(2)])),
-        li2=np.ascontiguousarray(np.array([phi.T @ s.I2[b] @ phi for b in range(2)])),
-        gl0=np.ascontiguousarray(np.array([phi.T @ s.gl0[b] for b in range(2)])),
-        glh=np.ascontiguousarray(np.array([phi.T @ s.HL[b] @ phi for b in range(2)])),
-        ugl0=np.ascontiguousarray(np.array([minv @ (phi.T @ s.gl0[b]) for b in range(2)])),
-        uglh=np.ascontiguousarray(np.array([minv @ (phi.T @ s.HL[b] @ phi) for b in range(2)])),
-    )
-    return CompiledModel(arrays, mesh.n_q, phi.shape[1], len(r), s.kinds, s, phi, phi_pinv, rotor, flight, settings)
+    parts = _GjFreeParts(mesh, s, st, p, shw, shd, sht, tip, teeter, np.linalg.inv(lag_m), af)
+    for a in (st, p, shw, shd, sht, tip, teeter, parts.lag_inv, af.cl, af.cd, af.cm, *(
+            v for v in vars(s).values() if isinstance(v, np.ndarray))):
+        a.flags.writeable = False  # shared by every model of this rotor: copied, never changed
+    return parts
 
 
 def polar_inertia(model: CompiledModel, y: np.ndarray) -> float:

@@ -149,8 +149,11 @@ def trapeze_radius2(rotor: Rotor, r) -> np.ndarray:
     return st.at("torsional_inertia_kg_m", r) / st.at("mass_kg_m", r)
 
 
-def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = True):
+def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = True, torsion: bool = True):
     """(M, K0, K2) of one blade over ``[beta, q]`` (blade displaced by ``+beta r``).
+
+    ``torsion=False``: K0 without the torsional stiffness (GJ), which
+    :func:`blade_torsion_stiffness` gives on its own (K0 is linear in GJ, and GJ enters nothing else).
 
     ``added_mass``: optional (m_a, s_a, i_a) callables of r for the aerodynamic apparent mass
     per length: lift ``m_a w''``, cross ``s_a``, pitch ``i_a`` (see :mod:`amra_core.model`).
@@ -165,7 +168,6 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool
     e = (st.at("x_cg", r) - st.at("x_ea", r)) * c
     I = st.at("torsional_inertia_kg_m", r)
     EI = st.at("ei_flap_nm2", r)
-    GJ = st.at("gj_nm2", r)
     T = tension_per_omega2(rotor, r)
 
     def integ(a, A, B):
@@ -184,7 +186,9 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool
     if added_mass is not None:
         ma, sa, ia = (f(r) for f in added_mass)
         M += integ(ma, Pw, Pw) + integ(sa, Pw, Pt) + integ(sa, Pt, Pw) + integ(ia, Pt, Pt)
-    K0 = integ(EI, ddPw, ddPw) + integ(GJ, dPt, dPt)
+    K0 = integ(EI, ddPw, ddPw)
+    if torsion:
+        K0 += _blade_torsion_stiffness(rotor, mesh, r, wq, dPt)
     K2 = integ(T, dPw, dPw) + K2tt - integ(m * e * r, dPw, Pt) - integ(m * e * r, Pt, dPw)
     if trapeze:
         K2 += integ(T * trapeze_radius2(rotor, r), dPt, dPt)
@@ -194,8 +198,6 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool
     L = rotor.blade_length_m
     if mesh.fidelity in ("rigid", "fem-torsion"):
         K0[1, 1] += K_FLAP_SPRING * st.mean("ei_flap_nm2") / L
-    if mesh.fidelity == "rigid":
-        K0[2, 2] += K_TORSION_SPRING * st.mean("gj_nm2") / L
 
     pm = rotor.point_mass
     if pm is not None and pm.mass_kg > 0:
@@ -209,6 +211,37 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool
         K2 += pm.mass_kg * ep**2 * np.outer(Pt1, Pt1)
         K2 -= pm.mass_kg * ep * pm.r_m * (np.outer(dPw1, Pt1) + np.outer(Pt1, dPw1))
     return M, K0, K2
+
+
+def _blade_torsion_stiffness(rotor: Rotor, mesh: BladeMesh, r, wq, dPt) -> np.ndarray:
+    """One blade's torsional stiffness over ``[beta, q]``: ``int GJ theta'^2`` (FEM levels) or the
+    rigid level's root spring ``k_theta = (pi/2)^2 GJ/L``."""
+    if mesh.fidelity == "rigid":
+        K = np.zeros((1 + mesh.n_q, 1 + mesh.n_q))
+        K[2, 2] = K_TORSION_SPRING * rotor.stations.mean("gj_nm2") / rotor.blade_length_m
+        return K
+    GJ = rotor.stations.at("gj_nm2", r)
+    return (dPt * (GJ * wq)[:, None]).T @ dPt
+
+
+def blade_torsion_stiffness(rotor: Rotor, mesh: BladeMesh) -> np.ndarray:
+    """One blade's torsional stiffness over ``[beta, q]`` [N m/rad per coordinate]."""
+    r, wq = quadrature(rotor, mesh)
+    _, _, _, _, dPt = _blade_shapes(mesh, r)
+    return _blade_torsion_stiffness(rotor, mesh, r, wq, dPt)
+
+
+def torsion_stiffness(rotor: Rotor, mesh: BladeMesh) -> np.ndarray:
+    """Both blades' torsional stiffness over ``[beta, q0, q1]``: the GJ part of K0 of :func:`assemble`
+    (``assemble(..., torsion=False).K0 + torsion_stiffness(...)`` is ``assemble(...).K0``)."""
+    Kb = blade_torsion_stiffness(rotor, mesh)
+    nq = mesh.n_q
+    K = np.zeros((1 + 2 * nq, 1 + 2 * nq))
+    for b, sign in ((0, 1.0), (1, -1.0)):
+        idx = np.concatenate([[0], 1 + b * nq + np.arange(nq)])
+        S = np.ones(1 + nq); S[0] = sign
+        K[np.ix_(idx, idx)] += Kb * np.outer(S, S)
+    return K
 
 
 def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True, lag_pivot: bool = False):
@@ -298,9 +331,12 @@ def blade_lag_geometry(rotor: Rotor, mesh: BladeMesh):
     return S2, integ(TI, dPw, dPw)
 
 
-def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = True) -> RotorStructure:
-    """Both blades and the teeter hinge, plus the lag/rotor-speed inertias."""
-    Mb, K0b, K2b = blade_matrices(rotor, mesh, added_mass, trapeze)
+def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = True,
+             torsion: bool = True) -> RotorStructure:
+    """Both blades and the teeter hinge, plus the lag/rotor-speed inertias. ``torsion=False``: K0
+    without its GJ part (:func:`torsion_stiffness`), the only part that depends on GJ, so a GJ
+    sweep assembles the rest once (:func:`amra_core.model.compile_model`)."""
+    Mb, K0b, K2b = blade_matrices(rotor, mesh, added_mass, trapeze, torsion)
     fb, g0b, Hb = blade_pitch_and_gyro(rotor, mesh, trapeze)
     _, gl0b, _ = blade_pitch_and_gyro(rotor, mesh, trapeze, lag_pivot=True)
     S2b, I2b = blade_lag_geometry(rotor, mesh)
