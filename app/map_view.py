@@ -5,10 +5,12 @@ Cells come from the session's subscription to the server-wide :class:`app.map_jo
 (CG, GJ) is a star; the critical-GJ lines of every fidelity computed so far for the same case are
 overlaid with a legend. Clicking the map loads the nearest cell's (CG, GJ) into the controls.
 
-Redraws are spaced: a redraw of the cells re-renders the HoloViews overlay, which recomputes the
-references of every model of the session's document (about 0.1 s of the server's event loop,
-shared by all sessions), so new cells are drawn at most every :data:`REDRAW_S` seconds times the
-load factor (the number of sessions following a map, halved), and at once when the map is done.
+The plot is a plain Bokeh figure on three data sources (cells, boundary lines, marker), not a
+HoloViews overlay: rendering the overlay took 0.93 s of the server's event loop per new session
+(cProfile of a session's page load, 2026-12-01: 40 % of it), and each redraw re-rendered it and
+recomputed the references of every model of the document. Now a redraw streams the new cells into
+their source. Redraws are still spaced, at most every :data:`REDRAW_S` seconds times the load
+factor (the number of sessions following a map, halved), and at once when the map is done.
 """
 from __future__ import annotations
 
@@ -17,28 +19,40 @@ import io
 import math
 import time
 
-import holoviews as hv
 import numpy as np
 import pandas as pd
 import panel as pn
-from holoviews.streams import Pipe, Stream, Tap
+from bokeh.events import Tap
+from bokeh.models import ColumnDataSource, HoverTool, Legend, LegendItem, Range1d
+from bokeh.plotting import figure
 
 from amra_core.boundary import MapSpec, cell_class
 from amra_core.stability import CellResult
 
-CG_DIM = hv.Dimension("cg_pct", label="CG", unit="% chord")
-GJ_DIM = hv.Dimension("gj_nm2", label="GJ", unit="N m²/rad")
-CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "failed": "#212121"}
+CG_LABEL = "CG [% chord]"
+GJ_LABEL = "GJ [N m²/rad]"
+CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "windmill-brake": "#90a4ae",
+                 "failed": "#212121"}
 FIDELITY_STYLE = {"rigid": ("#1565c0", "solid"), "fem-torsion": ("#ef6c00", "dashed"),
                   "fem-coupled": ("#6a1b9a", "dotdash")}
-Marker = Stream.define("Marker", cg_pct=40.0, gj=1500.0)
 REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the cells on an idle server [s]
+
+
+CELL_COLUMNS = ("cg_pct", "gj_nm2", "class", "verdict", "growth_rate_per_s", "colour")
 
 
 def cells_frame(cells) -> pd.DataFrame:
     rows = [(100.0 * c.cg, c.gj_nm2, cell_class(c), c.verdict,
              np.nan if c.growth_rate_per_s is None else c.growth_rate_per_s) for c in cells]
-    return pd.DataFrame(rows, columns=["cg_pct", "gj_nm2", "class", "verdict", "growth_rate_per_s"])
+    frame = pd.DataFrame(rows, columns=list(CELL_COLUMNS[:-1]))
+    frame["colour"] = [CLASS_COLOURS.get(k, CLASS_COLOURS["failed"]) for k in frame["class"]]
+    return frame
+
+
+def _columns(frame: pd.DataFrame) -> dict:
+    # text columns as lists of str: an empty (float) array as a colour column is "invalid color array"
+    return {c: [str(v) for v in frame[c]] if c in ("class", "verdict", "colour") else frame[c].to_numpy(dtype=float)
+            for c in CELL_COLUMNS}
 
 
 def nearest_cell(cells, cg_pct: float, gj: float):
@@ -71,9 +85,10 @@ class MapView(pn.viewable.Viewer):
         self.job = None
         self.seen = 0
         self.cells: list = []
-        self.pipe = Pipe(data=cells_frame([]))
-        self.lines = Pipe(data={})
-        self.marker = Marker()
+        self.cells_source = ColumnDataSource(_columns(cells_frame([])))
+        self.line_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
+        self.marker_source = ColumnDataSource({"cg_pct": [40.0], "gj_nm2": [1500.0]})
+        self._drawn = 0  #: cells in the plot's source
         self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", name="map-progress",
                                                bar_color="info")
         self.status = pn.pane.Markdown("Map: waiting ...", name="map-status")
@@ -97,7 +112,7 @@ class MapView(pn.viewable.Viewer):
         self.seen = 0
         self.cells = []
         self._undrawn = False
-        self.pipe.send(cells_frame([]))
+        self._draw(reset=True)
         self.progress.value = 0
 
     def release(self) -> None:
@@ -122,7 +137,7 @@ class MapView(pn.viewable.Viewer):
         if self._undrawn and (snap["state"] != "running" or now - self._drawn_at >= REDRAW_S * self.load_factor()):
             self._undrawn = False
             self._drawn_at = now
-            self.pipe.send(cells_frame(self.cells))
+            self._draw()
         total = max(snap["total"], 1)
         pct = 100 if snap["state"] == "done" else min(99, int(100 * snap["n"] / total))
         if self.progress.value != pct:
@@ -147,47 +162,60 @@ class MapView(pn.viewable.Viewer):
         key = repr(lines)
         if key != self._lines_key:
             self._lines_key = key
-            self.lines.send(lines)
+            for fid, src in self.line_sources.items():
+                pts = lines.get(fid, [])
+                src.data = {"cg_pct": [100.0 * cg for cg, _ in pts], "gj_nm2": [gj for _, gj in pts]}
 
     def mark(self, cg_pct: float, gj: float) -> None:
-        self.marker.event(cg_pct=float(cg_pct), gj=float(gj))
+        self.marker_source.data = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]}
+
+    def _draw(self, reset: bool = False) -> None:
+        """Bring the plotted cells up to :attr:`cells`: new ones are streamed (cells only arrive,
+        in order, until :meth:`follow` starts another map, which empties the plot)."""
+        if reset or self._drawn > len(self.cells):
+            self.cells_source.data = _columns(cells_frame(self.cells))
+        elif len(self.cells) > self._drawn:
+            self.cells_source.stream(_columns(cells_frame(self.cells[self._drawn:])))
+        self._drawn = len(self.cells)
 
     def csv(self) -> io.StringIO:
         return map_csv(self.cells)
 
     # -- plot
-    def _cells_plot(self, data):
-        return hv.Points(data, [CG_DIM, GJ_DIM], ["class", "verdict", "growth_rate_per_s"]).opts(
-            color="class", cmap=CLASS_COLOURS, marker="square", size=11, tools=["hover", "tap"], logy=True,
-            show_legend=True)
-
-    def _lines_plot(self, data):
-        layers = []
+    def figure(self):
+        """The map: cells coloured by class (hover: verdict and growth rate), the critical-GJ line
+        of every fidelity computed so far, the current case as a star; a tap loads the nearest cell."""
+        fig = figure(title="Stability boundary map (click a cell to load it)", height=420, sizing_mode="stretch_width",
+                     y_axis_type="log", x_range=Range1d(18, 52), y_range=Range1d(25, 3600),
+                     x_axis_label=CG_LABEL, y_axis_label=GJ_LABEL, tools="pan,wheel_zoom,box_zoom,reset,save",
+                     output_backend="canvas", name="map-plot")
+        cells = fig.scatter("cg_pct", "gj_nm2", source=self.cells_source, marker="square", size=11,
+                            color="colour", line_color="colour", legend_field="class")
+        fig.add_tools(HoverTool(renderers=[cells], tooltips=[
+            ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
+            ("verdict", "@verdict"), ("growth rate", "@growth_rate_per_s{0.000} 1/s")]))
+        items = []
         for fid, (colour, dash) in FIDELITY_STYLE.items():
-            pts = data.get(fid, [])
-            layers.append(hv.Curve([(100 * cg, gj) for cg, gj in pts], CG_DIM, GJ_DIM,
-                                   label=f"boundary {fid}").opts(color=colour, line_dash=dash, line_width=2.5,
-                                                                 logy=True))
-        return hv.Overlay(layers)
+            line = fig.line("cg_pct", "gj_nm2", source=self.line_sources[fid], color=colour, line_dash=dash,
+                            line_width=2.5)
+            items.append(LegendItem(label=f"boundary {fid}", renderers=[line]))
+        star = fig.scatter("cg_pct", "gj_nm2", source=self.marker_source, marker="star", size=20, color="gold",
+                           line_color="black")
+        items.append(LegendItem(label="current case", renderers=[star]))
+        classes = fig.legend[0]  # made by legend_field, inside the frame: beside it, above the lines' legend
+        fig.center.remove(classes)
+        classes.location = "top_left"
+        fig.add_layout(classes, "right")
+        fig.add_layout(Legend(items=items, location="top_left"), "right")
+        fig.toolbar.logo = None
+        fig.on_event(Tap, self._tapped)
+        return fig
 
-    def _marker_plot(self, cg_pct, gj):
-        return hv.Points([(cg_pct, gj)], [CG_DIM, GJ_DIM], label="current case").opts(
-            marker="star", size=20, color="gold", line_color="black", logy=True)
-
-    def _tapped(self, x=None, y=None):
-        cell = nearest_cell(self.cells, x, y)
+    def _tapped(self, event) -> None:
+        cell = nearest_cell(self.cells, event.x, event.y)
         if cell is not None:
             self.on_pick(cell)
 
     def __panel__(self):
-        cells = hv.DynamicMap(self._cells_plot, streams=[self.pipe])
-        lines = hv.DynamicMap(self._lines_plot, streams=[self.lines])
-        marker = hv.DynamicMap(self._marker_plot, streams=[self.marker])
-        tap = Tap(source=cells, x=None, y=None)
-        tap.add_subscriber(self._tapped)
-        plot = (cells * lines * marker).opts(
-            hv.opts.Overlay(title="Stability boundary map (click a cell to load it)", responsive=True, height=420,
-                            show_grid=True, legend_position="right", xlim=(18, 52), ylim=(25, 3600), logy=True))
-        return pn.Column(self.status, self.progress, pn.pane.HoloViews(plot, sizing_mode="stretch_width",
-                                                                       name="map-plot"),
+        return pn.Column(self.status, self.progress, pn.pane.Bokeh(self.figure(), sizing_mode="stretch_width"),
                          sizing_mode="stretch_width")
