@@ -105,6 +105,17 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     cell = dash.map.cells[3]
     dash.load_cell(cell)
     assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == cell.gj_nm2
+    # the plot holds every cell once, coloured by its class
+    from app.map_view import CLASS_COLOURS
+    from amra_core.boundary import cell_class
+    data = dash.map.cells_source.data
+    assert len(data["cg_pct"]) == len(dash.map.cells)
+    assert list(data["colour"]) == [CLASS_COLOURS[cell_class(c)] for c in dash.map.cells]
+    # a tap on the plot loads the nearest cell
+    from types import SimpleNamespace
+    other = dash.map.cells[-1]
+    dash.map._tapped(SimpleNamespace(x=100 * other.cg + 0.1, y=other.gj_nm2 * 1.001))
+    assert dash.controls.cg_pct == pytest.approx(100 * other.cg) and dash.controls.gj_nm2 == other.gj_nm2
     assert dash.map.csv().getvalue().splitlines()[0].startswith("cg,gj_nm2,verdict")
     assert len(dash.map.csv().getvalue().splitlines()) == len(dash.map.cells) + 1
 
