@@ -139,6 +139,15 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
         async def until_complete(page):
             return await _wait_map(page, r"complete", 600)
         text, errors = run_async(_with_page(f"http://127.0.0.1:{port2}/{url_q}", until_complete, chromium_args))
+    except BaseException as exc:
+        # an expected failure hides its message: keep what the restarted server did as an artifact
+        # (test-results/server-killed-mid-map.txt) for the cause still open in issue 11
+        out = REPO / "test-results" / "server-killed-mid-map.txt"
+        out.parent.mkdir(parents=True, exist_ok=True)
+        ps = subprocess.run(["ps", "-eo", "pid,ppid,ni,pcpu,etime,args"], capture_output=True, text=True).stdout
+        out.write_text(f"{type(exc).__name__}: {exc}\nstored columns: {_stored_columns(store)}\n\n--- restarted "
+                       f"server's log\n{srv2.log_text()[-6000:]}\n--- processes\n{ps[-6000:]}\n")
+        raise
     finally:
         srv2.stop()
     m = re.search(r"(\d+) cells \((\d+) from the store\)", text)
