@@ -252,3 +252,39 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
                        f"rate {wb[1]:.1f} m/s = {wb[2]:.1f} v_h (beyond the turbulent-wake region, V_c/v_h < "
                        f"-{WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
     return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays")
+
+
+
+def judge_after_change(history: np.ndarray, columns, change_row: int, change: str, omega_ref: float, axial: bool,
+                       status: str, new_trim_row=None, new_omega_rad_s: Optional[float] = None,
+                       trimmed: bool = True, perturbation_scale: float = 0.01,
+                       hover_induced_m_s: Optional[float] = None) -> Verdict:
+    """Classify the motion since a live parameter change: rows ``change_row`` on of ``history``;
+    ``change`` says what changed and when (it starts the explanation).
+
+    The run's trim is no reference after the change: judged against it, the move to the new
+    equilibrium reads as a growing deviation (measured: McCutcheon, GJ 1500 -> 3000 at t = 0.5 s,
+    "divergence, monotonic runaway" at 8 s). In axial flight the caller gives the trim of the new
+    values (``new_trim_row``, its history row, and ``new_omega_rad_s``; ``trimmed=False`` when none
+    exists), and the motion is judged about it, the jump to it taking the place of the perturbation
+    (deviations are normalised by the larger of the two). In forward flight the deviations are
+    taken one revolution apart (:func:`_deviation`), so no reference state is needed; the rotor
+    speed at the change stands for the trim's. ``omega_ref`` is the run's trim rotor speed [rad/s]."""
+    cols = {c: i for i, c in enumerate(columns)}
+    sub = history[change_row:]
+    head = f"since {change}: "
+    if len(sub) < 2:
+        return Verdict("undetermined", None, None, None, explanation=head + "no data yet")
+    if axial and trimmed and new_trim_row is not None:
+        ref, om_ref = np.asarray(new_trim_row, dtype=float), float(new_omega_rad_s)
+        jump = max(abs(sub[0, cols[k]] - ref[cols[k]]) for k in SIGNALS[:3])
+        jump = max(jump, abs(sub[0, cols["omega_rad_s"]] - om_ref) / om_ref)
+        scale = max(perturbation_scale, jump)
+        about = f"judged about the new equilibrium ({om_ref:.2f} rad/s); "
+    else:
+        ref, om_ref = sub[0], float(sub[0, cols["omega_rad_s"]]) if trimmed else omega_ref
+        scale = perturbation_scale
+        about = "" if trimmed else "no steady autorotation exists for the new values; "
+    v = judge(sub, columns, om_ref, axial, status, trimmed, ref, scale, hover_induced_m_s)
+    v.explanation = head + about + v.explanation
+    return v

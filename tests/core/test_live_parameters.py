@@ -254,3 +254,37 @@ def test_guard_rejects_inconsistent_model_arrays(two_models):
     arrays.p[P_NS] = a.n_s - 1
     with pytest.raises(kernel_guard.KernelShapeError):
         kernel_guard.evaluate(y, arrays, np.zeros(a.n_y), np.zeros(8))
+
+
+def test_the_verdict_after_a_live_change_is_judged_about_the_new_equilibrium(mccutcheon):
+    """A stiffer blade set mid-run moves the rotor to a new equilibrium (rotor speed 37.4 -> 39.7
+    rad/s). Judged against the run's original trim, that move read "divergence, monotonic runaway"
+    at 8 s (measured before the fix); judged about the trim of the new values it decays, as a fresh
+    run at GJ 3000 does."""
+    sim = Simulation(Case(mccutcheon, FlightCondition(), SolverSettings(fidelity="rigid")))
+    sim.advance(span_s=0.5)
+    sim.set_parameters(gj_nm2=3000.0)
+    sim.run(t_end_s=8.0)
+    v = sim.verdict()
+    assert v.verdict == "stable", v
+    assert v.explanation.startswith("since the change to GJ 3000 N m^2/rad at t = 0.50 s")
+    assert v.growth_rate_per_s < 0
+    fresh = Simulation(Case(mccutcheon.with_overrides(gj_nm2=3000.0), FlightCondition(),
+                            SolverSettings(fidelity="rigid"))).run(t_end_s=8.0)
+    assert fresh.verdict().verdict == "stable"
+    assert len(sim.changes) == 1 and sim.changes[0][1] == pytest.approx(0.5, abs=0.01)
+
+
+def test_a_live_change_into_no_autorotation_reads_unstable():
+    """Paper-boundary CG 0.40: GJ 1500 is stable, GJ 100 has no steady autorotation (the paper's
+    Fig. 10 case): after the change the rotor speed collapses and the verdict says so."""
+    from amra_core.rotor_io import load_preset
+    rotor = load_preset("paper-boundary").with_overrides(x_cg=0.40, gj_nm2=1500.0)
+    sim = Simulation(Case(rotor, FlightCondition(), SolverSettings(fidelity="rigid")))
+    sim.advance(span_s=0.5)
+    assert sim.verdict().verdict in ("stable", "undetermined")
+    sim.set_parameters(gj_nm2=100.0)
+    sim.run(t_end_s=8.0)
+    v = sim.verdict()
+    assert v.unstable, v
+    assert "no steady autorotation exists for the new values" in v.explanation
