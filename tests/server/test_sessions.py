@@ -121,17 +121,23 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
     url_q = f"main?map_columns={n_cols}&map_coarse=3"
     port = free_port()
     srv = start_amra_serve(tmp_path, port, env_extra=env)
+    seen = {}
     try:
         async def until_a_column(page):
             deadline = time.monotonic() + 400
             while not _stored_columns(store) and time.monotonic() < deadline:
                 await page.wait_for_timeout(200)
+            seen["map status at the kill"] = await _map_status(page)
+            seen["server log at the kill"] = srv.log_text()[-6000:]
+            seen["processes at the kill"] = _processes()
             srv.kill(signal.SIGKILL)  # mid-map, no clean shutdown
         run_async(_with_page(f"http://127.0.0.1:{port}/{url_q}", until_a_column, chromium_args))
         srv.proc.wait(10)
     finally:
         srv.stop()
     kept = _stored_columns(store)
+    if not 1 <= len(kept) < n_cols:
+        _keep_diagnostics(f"columns stored at the kill: {kept}", seen)
     assert 1 <= len(kept) < n_cols, f"columns stored at the kill: {kept} (the kill must come mid-map)"
     port2 = free_port()
     srv2 = start_amra_serve(tmp_path, port2, env_extra=env)
@@ -140,13 +146,8 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
             return await _wait_map(page, r"complete", 600)
         text, errors = run_async(_with_page(f"http://127.0.0.1:{port2}/{url_q}", until_complete, chromium_args))
     except BaseException as exc:
-        # an expected failure hides its message: keep what the restarted server did as an artifact
-        # (test-results/server-killed-mid-map.txt) for the cause still open in issue 11
-        out = REPO / "test-results" / "server-killed-mid-map.txt"
-        out.parent.mkdir(parents=True, exist_ok=True)
-        ps = subprocess.run(["ps", "-eo", "pid,ppid,ni,pcpu,etime,args"], capture_output=True, text=True).stdout
-        out.write_text(f"{type(exc).__name__}: {exc}\nstored columns: {_stored_columns(store)}\n\n--- restarted "
-                       f"server's log\n{srv2.log_text()[-6000:]}\n--- processes\n{ps[-6000:]}\n")
+        _keep_diagnostics(f"{type(exc).__name__}: {exc}; stored columns: {_stored_columns(store)}",
+                          {"restarted server's log": srv2.log_text()[-6000:], "processes": _processes()})
         raise
     finally:
         srv2.stop()
@@ -156,6 +157,18 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
     assert cached >= sum(kept)  # the columns finished before the kill are reused, not recomputed
     assert total > cached  # and the rest was computed after the restart
     assert len(_stored_columns(store)) == n_cols
+
+
+def _processes() -> str:
+    return subprocess.run(["ps", "-eo", "pid,ppid,ni,pcpu,etime,args"], capture_output=True, text=True).stdout[-6000:]
+
+
+def _keep_diagnostics(what: str, texts: dict) -> None:
+    """An expected failure hides its message: keep what the servers did as an artifact
+    (test-results/server-killed-mid-map.txt) for the cause still open in issue 11."""
+    out = REPO / "test-results" / "server-killed-mid-map.txt"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(what + "\n" + "".join(f"\n--- {k}\n{v}\n" for k, v in texts.items()))
 
 
 def _threads(pid) -> int:
