@@ -237,11 +237,10 @@ class Simulation:
         self.case = replace(self.case, rotor=rotor)
         self.model, self.y, self.dt, self.record_every = new, y, dt, every
         if self._chunks:  # the verdict now judges the motion since this change (verdict())
-            what = ", ".join(text for text, value in ((f"GJ {gj_nm2:.4g} N m^2/rad" if gj_nm2 is not None else "", gj_nm2),
-                                                      (f"EA {100 * x_ea:.1f} % chord" if x_ea is not None else "", x_ea),
-                                                      (f"CG {100 * x_cg:.1f} % chord" if x_cg is not None else "", x_cg))
-                             if value is not None)
-            self.changes.append((sum(len(c) for c in self._chunks), self.t, f"the change to {what} at t = {self.t:.2f} s"))
+            parts = [f"GJ {gj_nm2:.4g} N m^2/rad"] if gj_nm2 is not None else []
+            parts += [f"{name} {100 * v:.1f} % chord" for name, v in (("EA", x_ea), ("CG", x_cg)) if v is not None]
+            what = f"the change to {', '.join(parts)} at t = {self.t:.2f} s"
+            self.changes.append((sum(len(c) for c in self._chunks), self.t, what))
 
     def _time_step_for(self, model: CompiledModel, y: np.ndarray):
         """(dt, record_every) for ``model``: the given ``dt_s``, else the stable step at 1.3 times the
