@@ -235,13 +235,17 @@ def torsion_stiffness(rotor: Rotor, mesh: BladeMesh) -> np.ndarray:
     """Both blades' torsional stiffness over ``[beta, q0, q1]``: the GJ part of K0 of :func:`assemble`
     (``assemble(..., torsion=False).K0 + torsion_stiffness(...)`` is ``assemble(...).K0``)."""
     Kb = blade_torsion_stiffness(rotor, mesh)
-    nq = mesh.n_q
-    K = np.zeros((1 + 2 * nq, 1 + 2 * nq))
-    for b, sign in ((0, 1.0), (1, -1.0)):
-        idx = np.concatenate([[0], 1 + b * nq + np.arange(nq)])
-        S = np.ones(1 + nq); S[0] = sign
+    K = np.zeros((1 + 2 * mesh.n_q, 1 + 2 * mesh.n_q))
+    for _, idx, S in _blade_slots(mesh.n_q):
         K[np.ix_(idx, idx)] += Kb * np.outer(S, S)
     return K
+
+
+def _blade_slots(nq: int):
+    """Per blade b: (b, its rows in [beta, q0, q1], the signs of its coordinates: blade 1 sees -beta)."""
+    for b, sign in ((0, 1.0), (1, -1.0)):
+        S = np.ones(1 + nq); S[0] = sign
+        yield b, np.concatenate([[0], 1 + b * nq + np.arange(nq)]), S
 
 
 def blade_pitch_and_gyro(rotor: Rotor, mesh: BladeMesh, trapeze: bool = True, lag_pivot: bool = False):
@@ -345,9 +349,7 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
     S2 = np.zeros((2, n, n)); I2 = np.zeros((2, n, n)); HL = np.zeros((2, n, n)); gl0 = np.zeros((2, n))
     M = np.zeros((n, n)); K0 = np.zeros((n, n)); K2 = np.zeros((n, n)); H = np.zeros((n, n))
     f = np.zeros(n); g0 = np.zeros(n)
-    for b, sign in ((0, 1.0), (1, -1.0)):
-        idx = np.concatenate([[0], 1 + b * nq + np.arange(nq)])
-        S = np.ones(1 + nq); S[0] = sign  # blade 1 sees -beta
+    for b, idx, S in _blade_slots(nq):
         for G, B in ((M, Mb), (K0, K0b), (K2, K2b), (H, Hb)):
             G[np.ix_(idx, idx)] += B * np.outer(S, S)
         f[idx] += fb * S

@@ -254,7 +254,6 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays")
 
 
-
 def judge_after_change(history: np.ndarray, columns, change_row: int, change: str, omega_ref: float, axial: bool,
                        status: str, new_trim_row=None, new_omega_rad_s: Optional[float] = None,
                        trimmed: bool = True, perturbation_scale: float = 0.01,
