@@ -113,5 +113,10 @@ def build_layout(d):
     # server's event loop per new session, measured with cProfile; with two roots 0.2 s)
     sidebar = pn.Column(*build_sidebar(d), sizing_mode="stretch_width", name="sidebar")
     main = pn.Column(*build_main(d), sizing_mode="stretch_width", name="main")
+    # No busy indicator: Panel keeps one busy flag per process and sets every session's indicator
+    # from it, so each event of any session spun the spinner in all pages, and each spin changed
+    # its CSS classes, which makes BokehJS lay out the whole page again (eight sessions: a third
+    # of a page's main thread, CPU profile 2026-12-01). The run status and the map's progress
+    # say what this session is doing.
     return pn.template.BootstrapTemplate(title=TITLE, sidebar=[sidebar], main=[main],
-                                         sidebar_width=330, header_background="#263238")
+                                         sidebar_width=330, header_background="#263238", busy_indicator=None)

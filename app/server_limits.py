@@ -182,6 +182,11 @@ class StreamBudget:
         """Shortest wall-clock interval between one session's updates now [s]."""
         return self.streaming / self.total_hz
 
+    def load_factor(self) -> float:
+        """1 with one or two sessions streaming, n/2 with n: the factor by which each session
+        stretches the periods of its secondary updates (running clock, "so far" verdict)."""
+        return max(1.0, self.streaming / 2.0)
+
 
 STREAM_BUDGET_KEY = "amra-stream-budget"
 

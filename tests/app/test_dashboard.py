@@ -138,3 +138,18 @@ def test_uploaded_rotor_is_used(dash):
     assert dash.upload(data, "mine.toml")
     assert dash.controls.rotor == "uploaded file" and dash.controls.case(dash.uploaded).rotor.name == "mccutcheon"
     assert dash.map_spec().rotor.name == "mccutcheon"
+
+
+def test_the_page_registers_no_busy_indicator_shared_by_every_session(dash):
+    """Panel's template busy indicator follows one process-wide busy flag: every event of any
+    session would spin it in every page (and re-layout each page). The page has none."""
+    import holoviews as hv
+    import panel as pn
+    from bokeh.document import Document
+    from app.layout import build_layout
+    hv.extension("bokeh", logo=False)
+    before = len(pn.state._indicators)
+    page = build_layout(dash)
+    assert page.busy_indicator is None
+    doc = page.server_doc(Document())
+    assert len(pn.state._indicators) == before and doc.roots

@@ -112,3 +112,44 @@ def test_a_session_joins_the_budget_while_it_streams(dash, wait):
     dash.pump()
     dash.pump()
     assert dash.budget.streaming == 0 and dash.histories.min_interval_s == 0.0
+
+
+def test_the_load_factor_stretches_secondary_updates_with_the_streaming_sessions():
+    budget = StreamBudget(total_hz=160.0)
+    assert budget.load_factor() == 1.0
+    for who in range(2):
+        budget.join(who)
+    assert budget.load_factor() == 1.0
+    for who in range(2, 8):
+        budget.join(who)
+    assert budget.load_factor() == pytest.approx(4.0)
+
+
+class _Verdict:
+    def __init__(self, verdict="stable"):
+        self.verdict, self.explanation = verdict, "test"
+        self.growth_rate_per_s = self.frequency_hz = self.collapse_time_s = None
+
+
+def test_a_loaded_server_shows_so_far_verdicts_less_often_and_the_final_one_at_once(dash):
+    from app.dashboard import VERDICT_PERIOD_S
+    dash.budget = StreamBudget(total_hz=160.0)
+    for who in range(8):  # eight sessions streaming: load factor 4
+        dash.budget.join(who)
+    shown = []
+    dash.verdict.show = lambda v, final, *a: shown.append((v.verdict, final))
+    run = dash.current_run
+    dash.outbox.put(("verdict", {"run_id": run, "verdict": _Verdict("stable"), "final": False, "status": "running",
+                                 "start_note": ""}))
+    dash.pump()
+    dash.outbox.put(("verdict", {"run_id": run, "verdict": _Verdict("flutter"), "final": False, "status": "running",
+                                 "start_note": ""}))
+    dash.pump()  # within 4 x VERDICT_PERIOD_S of the first: not shown
+    assert shown == [("stable", False)]
+    dash._verdict_at -= 4 * VERDICT_PERIOD_S + 0.01  # as if that time had passed
+    dash.outbox.put(("verdict", {"run_id": run, "verdict": _Verdict("flutter"), "final": False, "status": "running",
+                                 "start_note": ""}))
+    dash.outbox.put(("verdict", {"run_id": run, "verdict": _Verdict("divergence"), "final": True,
+                                 "status": "completed", "start_note": ""}))
+    dash.pump()
+    assert shown == [("stable", False), ("flutter", False), ("divergence", True)]
