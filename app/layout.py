@@ -12,6 +12,7 @@ from bokeh.models import CustomJSTickFormatter
 
 from . import exports
 from .controls import GJ_BOUNDS
+from .doc_lock import with_document_lock
 from .presets import PRESETS
 
 TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
@@ -60,16 +61,18 @@ def build_sidebar(d) -> list:
     c.param.watch(explain, "preset")
     upload = pn.widgets.FileInput(accept=".toml", multiple=False, name="Rotor file (TOML)",
                                   sizing_mode="stretch_width", css_classes=["amra-upload"])
-    upload.param.watch(lambda e: e.new is not None and d.upload(e.new, upload.filename or "upload.toml"), "value")
+    upload.param.watch(with_document_lock(lambda e: e.new is not None and d.upload(e.new, upload.filename
+                                                                               or "upload.toml")), "value")
     run = pn.widgets.Button(name="▶ Run", button_type="primary", css_classes=["amra-run"])
     stop = pn.widgets.Button(name="■ Stop", button_type="warning", css_classes=["amra-stop"])
     reset = pn.widgets.Button(name="↺ Reset", button_type="light", css_classes=["amra-reset"])
-    run.on_click(d.start_run)
-    stop.on_click(d.stop_run)
-    reset.on_click(d.reset)
+    # the plots, map and markers are plain Bokeh models: change them under the lock (app.doc_lock)
+    run.on_click(with_document_lock(d.start_run))
+    stop.on_click(with_document_lock(d.stop_run))
+    reset.on_click(with_document_lock(d.reset))
     ladder = pn.widgets.Button(name="Run fidelity ladder", button_type="default", sizing_mode="stretch_width",
                                css_classes=["amra-ladder"])
-    ladder.on_click(d.run_ladder)
+    ladder.on_click(with_document_lock(d.run_ladder))
     sel = pn.widgets.Select
     advanced = pn.Card(
         _w(pn.widgets.FloatInput, c, "airspeed_m_s"), _w(pn.widgets.FloatInput, c, "omega_hold_rad_s"),
