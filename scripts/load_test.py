@@ -49,11 +49,14 @@ _INIT_JS = """
 window.__amra = {release: null, wsClosed: 0};
 document.addEventListener('pointerup', () => { window.__amra.release = performance.now(); }, true);
 window.__amraSource = () => {
+  // the live plots' source, found once (the probe runs every 10 ms: it must not load a busy page)
+  const m = window.__amra.model;
+  if (m) return m.data;
   for (const doc of (window.Bokeh ? Bokeh.documents : [])) {
     for (const m of doc.all_models) {
       const d = m.data;
       if (d === undefined || d === null || typeof d !== 'object' || d instanceof Map) continue;
-      if (d.t_s !== undefined && d.gj_nm2 !== undefined) return d;
+      if (d.t_s !== undefined && d.gj_nm2 !== undefined) { window.__amra.model = m; return d; }
     }
   }
   return null;
@@ -78,10 +81,12 @@ _WAIT_NEW_GJ_JS = """([old, timeout_ms]) => new Promise((resolve) => {
     const last = window.__amraLast();
     const t0 = window.__amra.release;
     if (last && t0 !== null && Math.abs(last.gj - old) > 1e-6 * Math.abs(old)) {
-      clearInterval(iv); resolve(performance.now() - t0);
+      clearInterval(iv);
+      const now = performance.now();
+      resolve([now - t0, (performance.timeOrigin + t0) / 1000, (performance.timeOrigin + now) / 1000, last.gj]);
     }
   }, 10);
-  setTimeout(() => { clearInterval(iv); resolve(-1); }, timeout_ms);
+  setTimeout(() => { clearInterval(iv); resolve([-1, 0, 0, 0]); }, timeout_ms);
 })"""
 
 
@@ -169,6 +174,18 @@ class Server:
         except OSError:
             return 0.0
 
+    def live_events(self) -> list:
+        """Each live change logged by the server: (received, sent) as epoch seconds, and its GJ."""
+        import re
+        from datetime import datetime
+        text = Path(self.dir, "serve.log").read_text(errors="replace")
+        out = []
+        for stamp, gj, lat in re.findall(r"^(\d{4}-\d\d-\d\d \d\d:\d\d:\d\d,\d{3}) live change to GJ (\S+) "
+                                         r".*first rows with it sent ([0-9.]+) s after", text, re.M):
+            sent = datetime.strptime(stamp, "%Y-%m-%d %H:%M:%S,%f").timestamp()
+            out.append((sent - float(lat), sent, float(gj)))
+        return out
+
     def live_latencies_s(self) -> list:
         """Server side of each slider move: the change received -> first rows with it sent [s]
         (logged by app.dashboard at info level)."""
@@ -194,10 +211,20 @@ class Server:
         self.log.close()
 
 
+def niced_chromium(niceness: int) -> str:
+    """An executable that starts Chromium at ``niceness``: the browsers, which here share the
+    server's two cores, then take only the CPU the server leaves, as clients on their own machines
+    would (the wrapper goes in a temporary directory, never beside a user's files)."""
+    path = Path(tempfile.mkdtemp(prefix="amra-load-chromium-"), "chromium")
+    path.write_text(f'#!/bin/sh\nexec nice -n {int(niceness)} {CHROMIUM} "$@"\n')
+    path.chmod(0o755)
+    return str(path)
+
+
 # ---------------------------------------------------------------------------- one session
 async def session(browser, url: str, moves: int, timeout_s: float, index: int, stagger_s: float) -> dict:
     await asyncio.sleep(index * stagger_s)
-    out = {"latencies_s": [], "run_first_s": None, "load_s": None, "errors": []}
+    out = {"latencies_s": [], "moves": [], "run_first_s": None, "load_s": None, "errors": []}
     ctx = await browser.new_context(viewport={"width": 1400, "height": 1000})
     page = await ctx.new_page()
     page.on("pageerror", lambda e: out["errors"].append(f"page error: {e}"))
@@ -229,7 +256,9 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
             await page.mouse.down()
             await page.mouse.move(x + dx, y, steps=4)
             await page.mouse.up()
-            lat = await page.evaluate(_WAIT_NEW_GJ_JS, [last["gj"], timeout_s * 1000])
+            lat, released, seen, gj = await page.evaluate(_WAIT_NEW_GJ_JS, [last["gj"], timeout_s * 1000])
+            if lat >= 0:
+                out["moves"].append({"released": released, "seen": seen, "gj": gj})
             if lat < 0:
                 out["errors"].append(f"move {k}: no point with the new GJ within {timeout_s:.0f} s")
             else:
@@ -247,6 +276,26 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
         out["page"] = page
         out["ctx"] = ctx
     return out
+
+
+def split_latencies(moves: list, events: list) -> dict:
+    """Where each slider move's latency went: release -> the server has the change, -> the server
+    sends the first rows with it, -> those rows are in the page (the log's times are to 1 ms; each
+    move is matched to the logged change of its GJ, to the log's 4 digits, sent between its release
+    and its arrival)."""
+    to_server, in_server, to_page = [], [], []
+    for m in moves:
+        match = [e for e in events if m["released"] - 0.01 <= e[0] and e[1] <= m["seen"] + 0.01
+                 and abs(e[2] - m["gj"]) <= 1e-3 * abs(m["gj"])]
+        if len(match) == 1:
+            received, sent, _ = match[0]
+            to_server.append(received - m["released"])
+            in_server.append(sent - received)
+            to_page.append(m["seen"] - sent)
+    return {"split_moves": len(to_server),
+            "release_to_server_p50_s": _pct(to_server, 0.5), "release_to_server_p95_s": _pct(to_server, 0.95),
+            "in_server_p50_s": _pct(in_server, 0.5), "in_server_p95_s": _pct(in_server, 0.95),
+            "sent_to_page_p50_s": _pct(to_page, 0.5), "sent_to_page_p95_s": _pct(to_page, 0.95)}
 
 
 def _pct(xs, q):
@@ -310,6 +359,7 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         srv_lat = server.live_latencies_s()
         out.update({"server_side_moves": len(srv_lat), "server_side_p50_s": _pct(srv_lat, 0.5),
                     "server_side_p95_s": _pct(srv_lat, 0.95)})
+        out.update(split_latencies([m for r in results for m in r["moves"]], server.live_events()))
         out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
                     "rss_sessions_open_mb": round(rss_open, 1),
                     "server_rss_base_mb": round(main0, 1), "server_rss_peak_mb": round(peak_main[0], 1),
@@ -326,6 +376,9 @@ def main(argv=None) -> int:
     ap.add_argument("--stagger", type=float, default=0.25, help="delay between session starts [s]")
     ap.add_argument("--url", help="an already running dashboard (.../main); default: start amra serve")
     ap.add_argument("--serve-arg", action="append", default=[], help="extra amra serve argument (repeatable)")
+    ap.add_argument("--client-nice", type=int, default=0,
+                    help="run the browsers at this niceness (e.g. 19: the server's cores go to the server first, "
+                         "as if the browsers ran on other machines); default 0, same priority as the server")
     ap.add_argument("--json", help="write the results here")
     a = ap.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # so the server below is stopped too
@@ -333,7 +386,12 @@ def main(argv=None) -> int:
     for n in a.sessions:
         server = None if a.url else Server(args=a.serve_arg)
         try:
-            r = asyncio.run(run_level(n, a.url or server.url, a.moves, a.timeout, server, a.run_s, a.stagger))
+            launch = None
+            if a.client_nice:
+                launch = {"executable_path": niced_chromium(a.client_nice), "args": CHROMIUM_ARGS, "headless": True}
+            r = asyncio.run(run_level(n, a.url or server.url, a.moves, a.timeout, server, a.run_s, a.stagger,
+                                      launch=launch))
+            r["client_nice"] = a.client_nice
         finally:
             if server:
                 server.stop()
