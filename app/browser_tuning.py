@@ -8,13 +8,15 @@ visual property, so each visual it paints (every tick label, title, axis and bor
 page's style, so each call recomputes it; after that, 15 % in the plots' ``base_font_size``
 (``getComputedStyle(el).fontSize``, once per plot and paint), for the same reason. Neither this app nor Panel's or Bokeh's themes set those
 variables, but to stay correct if a theme does, both lookups are cached per element for
-:data:`CSS_CACHE_MS` rather than ignored: a theme change shows within that time.
+:data:`CSS_CACHE_MS` rather than ignored: a theme change shows within that time. (A cache of one
+second did nothing in a starved page, whose frames are more than a second apart: in a page among
+eight on two cores, ``getPropertyValue`` was still 14 % of the main thread; with 30 s, 2 %.)
 """
 from __future__ import annotations
 
 from bokeh.models import CustomJS
 
-CSS_CACHE_MS = 1000  #: how long a looked-up CSS variable of a plot element is reused [ms]
+CSS_CACHE_MS = 30_000  #: how long a looked-up CSS variable of a plot element is reused [ms]
 
 _PATCH_JS = """
 const mod = (window.Bokeh && Bokeh.require) ? Bokeh.require("core/visuals/visual") : null;

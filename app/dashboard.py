@@ -296,17 +296,23 @@ class Dashboard(pn.viewable.Viewer):
             elif kind == "error":
                 self.notify(p["text"])
         if run_text is not None and (not clock_only
-                                     or time.perf_counter() - self._run_text_at >= RUN_TEXT_PERIOD_S):
-            self._run_text(run_text)  # the clock text twice a second: a Markdown update costs ~5 ms
+                                     or time.perf_counter() - self._run_text_at >= RUN_TEXT_PERIOD_S * load):
+            # the clock twice a second, less often on a loaded server: a Markdown update costs the
+            # server ~5 ms, and each page a re-layout (~0.1 s of a starved page's main thread)
+            self._run_text(run_text)
         if self.budget is not None:  # the server's updates per second, shared by the streaming sessions
             streaming = self.worker.running or self.histories.pending_rows > 0
             if streaming != self._in_budget:
                 (self.budget.join if streaming else self.budget.leave)(id(self))
                 self._in_budget = streaming
             self.histories.min_interval_s = self.budget.min_interval_s() if streaming else 0.0
+        urgent = False
         for cols in frames:
             self.histories.queue(cols)
-        n = self.histories.flush()  # sent now, or once the browser has drawn the last batch
+            if self._live_since is not None:  # the first rows with the user's change go at once
+                gj = self._live_since[0]
+                urgent = urgent or bool(np.any(np.abs(cols["gj_nm2"] - gj) <= 1e-9 * gj))
+        n = self.histories.flush(urgent=urgent)  # sent now, or once the browser has drawn the last batch
         if frames:
             self.fan.set_omega(float(frames[-1]["omega_rad_s"][-1]))
         if n and self._live_since is not None:

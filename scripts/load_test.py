@@ -330,8 +330,10 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         t0 = time.monotonic()
         client_cpu0 = cpu_seconds_of("chromium")
         sep = "&" if "?" in url else "?"
-        results = await asyncio.gather(*[session(browser, f"{url}{sep}run_s={run_s:g}", moves, timeout_s, i,
-                                                 stagger_s) for i in range(n)])
+        # each session starts from its own GJ (the map, GJ against CG, is the same case for all), so
+        # the GJs the slider moves reach are unique to a session and the server's log lines match them
+        results = await asyncio.gather(*[session(browser, f"{url}{sep}run_s={run_s:g}&gj={1500 + 10 * i:g}", moves,
+                                                 timeout_s, i, stagger_s) for i in range(n)])
         wall = time.monotonic() - t0
         client_cpu = cpu_seconds_of("chromium") - client_cpu0
         rss_open = server.rss_mb() if server else None

@@ -57,6 +57,28 @@ def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     dash.stop_run()
 
 
+def test_a_live_changes_first_rows_go_out_though_the_browser_has_not_confirmed_drawing(dash, wait, monkeypatch):
+    """A browser that confirms nothing gets no more batches for ACK_TIMEOUT_S (here a minute), except
+    the first rows computed with the user's own change, which are sent at once."""
+    import app.streams as streams
+    monkeypatch.setattr(streams, "ACK_TIMEOUT_S", 60.0)
+    h = dash.histories
+    h.enable_flow_control()
+    dash.controls.param.update(run_s=20.0, speed=4.0)
+    dash.start_run()
+    pump_until(dash, lambda: h.in_flight >= streams.WINDOW_BATCHES and h.pending_rows > 0, wait,
+               what="the window full of unconfirmed batches")
+    sent = h.batches_sent
+    dash.controls.gj_nm2 = 700.0
+    pump_until(dash, lambda: (np.asarray(h.source.data["gj_nm2"]) == 700.0).any(), wait, timeout_s=30,
+               what="the new GJ sent despite the full window")
+    assert h.batches_sent == sent + 1 and h.in_flight == streams.WINDOW_BATCHES + 1
+    for _ in range(20):  # and then the window holds again
+        dash.pump()
+    assert h.batches_sent == sent + 1
+    dash.stop_run()
+
+
 def test_close_stops_the_worker_and_releases_the_map(dash, wait):
     dash.controls.param.update(run_s=30.0, speed=1.0)
     dash.refresh_analyses()

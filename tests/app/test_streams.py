@@ -86,6 +86,37 @@ def test_the_stream_budget_shares_the_servers_updates_among_streaming_sessions()
     assert h.flush(now=t_sent + 0.11) == 5
 
 
+def test_the_first_rows_with_the_users_change_skip_flow_control_and_the_budget():
+    """A slider release is answered at once: its rows wait neither for the browser's confirmation
+    of earlier batches nor for the stream budget's interval; later rows wait again."""
+    h = TimeHistories()
+    h.enable_flow_control()
+    for k in range(WINDOW_BATCHES):
+        h.queue(_frame(0.025 * k, 5))
+        assert h.flush(now=100.0 * k) == 5
+    assert h.in_flight == WINDOW_BATCHES
+    h.min_interval_s = 10.0
+    t_next = 0.025 * WINDOW_BATCHES
+    h.queue(_frame(t_next, 5))
+    assert h.flush() == 0
+    assert h.flush(urgent=True) == 5 and h.in_flight == WINDOW_BATCHES + 1
+    h.queue(_frame(t_next + 0.025, 5))
+    assert h.flush() == 0 and h.pending_rows == 5
+    t = np.asarray(h.source.data["t_s"])
+    assert len(t) == 5 * (WINDOW_BATCHES + 1) and np.all(np.diff(t) > 0)
+
+
+def test_the_pages_rest_after_drawing_follows_the_draw_duty():
+    """The confirmation JS rests (1 - duty) / duty times the drawing beyond FAST_DRAW_MS, capped below the server's
+    patience (a rest longer than ACK_TIMEOUT_S would be overtaken by the next batch anyway)."""
+    from app import streams
+    js = streams._ack_js()
+    ratio = (1.0 - streams.DRAW_DUTY) / streams.DRAW_DUTY
+    assert f"Math.max(0, drawn_ms - {streams.FAST_DRAW_MS!r}) * {ratio!r}" in js and "REST" not in js
+    cap = float(js.split("Math.min(")[1].split(",")[0])
+    assert 0 < cap < 1000.0 * ACK_TIMEOUT_S
+
+
 @pytest.fixture
 def dash(server_settings, analysis_pool):
     from app.dashboard import Dashboard
