@@ -95,6 +95,7 @@ class MapView(pn.viewable.Viewer):
         self._lines_key = None
         self._undrawn = False  #: cells received but not drawn yet
         self._drawn_at = -1e9
+        self._class_legends: list = []  #: the cell-class legend of each figure built: shown once there are cells
 
     def load_factor(self) -> float:
         """1 on a server with one or two sessions following maps, n/2 with n sessions."""
@@ -177,6 +178,9 @@ class MapView(pn.viewable.Viewer):
         elif len(self.cells) > self._drawn:
             self.cells_source.stream(_columns(cells_frame(self.cells[self._drawn:])))
         self._drawn = len(self.cells)
+        for legend in self._class_legends:
+            if legend.visible != bool(self.cells):
+                legend.visible = bool(self.cells)
 
     def csv(self) -> io.StringIO:
         return map_csv(self.cells)
@@ -205,6 +209,8 @@ class MapView(pn.viewable.Viewer):
         classes = fig.legend[0]  # made by legend_field, inside the frame: beside it, above the lines' legend
         fig.center.remove(classes)
         classes.location = "top_left"
+        classes.visible = bool(self.cells)  # no empty box before the first cell
+        self._class_legends.append(classes)
         fig.add_layout(classes, "right")
         fig.add_layout(Legend(items=items, location="top_left"), "right")
         fig.toolbar.logo = None

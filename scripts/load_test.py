@@ -227,6 +227,7 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
     out = {"latencies_s": [], "moves": [], "run_first_s": None, "load_s": None, "errors": []}
     ctx = await browser.new_context(viewport={"width": 1400, "height": 1000})
     page = await ctx.new_page()
+    page.set_default_timeout(timeout_s * 1000)  # the script's own actions too (Playwright's default: 30 s)
     page.on("pageerror", lambda e: out["errors"].append(f"page error: {e}"))
     page.on("console", lambda m: m.type == "error" and out["errors"].append(f"console: {m.text[:200]}"))
     page.on("requestfailed", lambda r: out["errors"].append(f"request failed: {r.url[:120]} ({r.failure})"))

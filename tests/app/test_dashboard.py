@@ -120,9 +120,13 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
 
 
 def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
+    dash.map.figure()
+    classes = dash.map._class_legends[-1]
+    assert not classes.visible  # the cell-class legend: no empty box before the first cell
     dash.refresh_analyses()
     pump_until(dash, lambda: dash.map.job.state == "done" and dash.map.cells, wait, 180, what="the map")
     dash.map.poll()
+    assert classes.visible and len(classes.items) == 1  # one legend_field item, one entry per class
     assert dash.map.progress.value == 100 and "complete" in dash.map.status.object
     cell = dash.map.cells[3]
     dash.load_cell(cell)

@@ -250,16 +250,10 @@ def test_map_through_a_dask_cluster_beside_the_server(amra_server, chromium_args
     assert ran.get("compute_column", {}).get("compute", 0) > 0, f"no map task ran on the cluster: {ran}"
 
 
-@pytest.mark.xfail(strict=False, reason=(
-    "issue 11: on this 2-core machine the 8 Chromiums beside the server starve their own pages. "
-    "2026-12-01, three runs of the code after the busy-indicator and pane-throttling fixes (22:57; "
-    "23:15 with the browsers at nice 19; 23:33): the server's share (change received -> first rows "
-    "sent) p95 1.2-2.7 s, the browsers 1.4-1.5 of the 2 cores, page loads 24-27 s, slider p50 5-12 s "
-    "and p95 15-32 s in the page, and 0-5 errors per run, all the script's own page actions timing out "
-    "(Locator.scroll_into_view_if_needed 30 s)"))
 def test_load_eight_sessions_no_errors(tmp_path):
-    """scripts/load_test.py at N = 8 (the figures are printed; the target p95 <= 2 s is reported,
-    not asserted: it depends on the machine)."""
+    """scripts/load_test.py at N = 8: no errors, every slider move seen in its page (the figures
+    are printed; the target p95 <= 2 s is reported, not asserted: on this 2-core machine the eight
+    Chromiums share the server's cores and their pages are starved, see README "Scaling")."""
     rc = subprocess.run([sys.executable, "scripts/load_test.py", "--sessions", "8", "--moves", "2",
                          "--json", str(tmp_path / "load-8.json")], cwd=REPO, timeout=1500).returncode
     import json
