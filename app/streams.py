@@ -60,7 +60,7 @@ DRAW_DUTY = 0.5
 FAST_DRAW_MS = 100.0  #: a drawing (batch applied -> frame painted) this quick needs no rest [ms]
 
 #: the browser counts the streamed batches it has applied; after the frame that draws them, and a
-#: rest as long as the drawing (``DRAW_DUTY``), it reports the count in ``tags[0]`` of a separate,
+#: rest if that drawing was slow (``DRAW_DUTY``), it reports the count in ``tags[0]`` of a separate,
 #: unplotted source (a property change that BokehJS sends back to the server; on the plotted source
 #: itself, any property change makes every plot re-index its data and repaint)
 _ACK_JS = """
@@ -77,6 +77,7 @@ requestAnimationFrame(() => setTimeout(() => {
   setTimeout(confirm, Math.min(REST_CAP_MS, Math.max(0, drawn_ms - FAST_MS) * REST_RATIO));
 }, 0));
 """
+
 
 def _ack_js() -> str:
     rest_cap_ms = 0.9 * ACK_TIMEOUT_S * 1000.0  # a rest never outlasts the server's patience
