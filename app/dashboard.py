@@ -45,6 +45,11 @@ MAP_GJ_RANGE = (30.0, 3000.0)
 log = logging.getLogger("amra.dashboard")
 
 
+def _same_gj(a: float, b: float) -> bool:
+    """Whether two GJ values [N m²/rad] are the same setting (to rounding)."""
+    return abs(float(a) - float(b)) <= 1e-9 * abs(float(b))
+
+
 class Dashboard(pn.viewable.Viewer):
     def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, **params):
         super().__init__(**params)
@@ -306,18 +311,18 @@ class Dashboard(pn.viewable.Viewer):
                 (self.budget.join if streaming else self.budget.leave)(id(self))
                 self._in_budget = streaming
             self.histories.min_interval_s = self.budget.min_interval_s() if streaming else 0.0
-        urgent = False
         for cols in frames:
             self.histories.queue(cols)
-            if self._live_since is not None:  # the first rows with the user's change go at once
-                gj = self._live_since[0]
-                urgent = urgent or bool(np.any(np.abs(cols["gj_nm2"] - gj) <= 1e-9 * gj))
+        live_gj = self._live_since[0] if self._live_since is not None else None
+        # the first rows with the user's change go at once (rows come in time order, so the newest
+        # one carries the change if any does)
+        urgent = live_gj is not None and bool(frames) and _same_gj(frames[-1]["gj_nm2"][-1], live_gj)
         n = self.histories.flush(urgent=urgent)  # sent now, or once the browser has drawn the last batch
         if frames:
             self.fan.set_omega(float(frames[-1]["omega_rad_s"][-1]))
-        if n and self._live_since is not None:
+        if n and live_gj is not None:
             gj, since = self._live_since
-            if abs(self.histories.last_sent_gj - gj) <= 1e-9 * gj:
+            if _same_gj(self.histories.last_sent_gj, gj):
                 self._live_since = None
                 self.live_latencies_s.append(time.perf_counter() - since)
                 log.info("live change to GJ %.4g N m²/rad: first rows with it sent %.3f s after it reached "

@@ -191,16 +191,15 @@ class TimeHistories:
         if not self._pending:
             return 0
         now = time.monotonic() if now is None else now
-        if urgent:
-            pass
-        elif now - self._sent_at < self.min_interval_s:
-            return 0
-        elif self.flow_control and self.in_flight >= WINDOW_BATCHES:
-            if self._awaiting_since is None:
-                self._awaiting_since = now
-            if now - self._awaiting_since < ACK_TIMEOUT_S:
+        if not urgent:
+            if now - self._sent_at < self.min_interval_s:
                 return 0
-            self._awaiting_since = now  # no confirmation for a while (a hidden tab draws nothing): one batch
+            if self.flow_control and self.in_flight >= WINDOW_BATCHES:
+                if self._awaiting_since is None:
+                    self._awaiting_since = now
+                if now - self._awaiting_since < ACK_TIMEOUT_S:
+                    return 0
+                self._awaiting_since = now  # no confirmation for a while (a hidden tab draws nothing): one batch
         batch = self._pending
         self._pending = []
         cols = batch[0] if len(batch) == 1 else {c: np.concatenate([b[c] for b in batch]) for c in COLUMNS}
