@@ -184,3 +184,14 @@ def test_a_loaded_server_shows_so_far_verdicts_less_often_and_the_final_one_at_o
                                  "status": "completed", "start_note": ""}))
     dash.pump()
     assert shown == [("stable", False), ("flutter", False), ("divergence", True)]
+
+
+def test_the_plot_ranges_stay_in_the_browser_and_the_drawing_count_comes_back():
+    """The ranges follow the data in the browser; synced back they cost the server a message per
+    drawing and range. The ack source must sync: it is the flow control."""
+    h = TimeHistories()
+    plots = h.plots()
+    ranges = {id(r): r for p in plots for r in (p.x_range, p.y_range)}
+    assert len(ranges) == 1 + len(plots)  # one shared time axis, a value axis each
+    assert all(r.syncable is False for r in ranges.values())
+    assert h.ack.syncable is True and h.source.syncable is True

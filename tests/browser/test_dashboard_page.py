@@ -4,6 +4,7 @@ Short runs at rigid fidelity and a 3-column map keep it quick; screenshots go to
 test-results/screenshots/."""
 from __future__ import annotations
 
+import json
 import re
 
 import pytest
@@ -63,6 +64,52 @@ def test_a_run_streams_points_into_the_plots(watched_page, dashboard_url):
     assert 700 <= rows <= 900 and gj == 1500  # 200 rows per simulated second
     expect(page.locator(".amra-verdict[data-final='true']")).to_be_visible(timeout=30_000)
     shot(page, "02-run-streamed")
+    assert page.amra_errors == []
+
+
+_RECORD_SENDS_JS = """
+window.__amraSends = [];
+const send = WebSocket.prototype.send;
+WebSocket.prototype.send = function (data) {
+  if (typeof data === 'string') { window.__amraSends.push(data); }
+  return send.call(this, data);
+};
+"""
+
+_SAME_CSS_JS = """() => {
+  const IS = Bokeh.require("core/dom").InlineStyleSheet;
+  const sheet = new IS(".amra-probe { color: red; }");
+  const node = sheet.el.firstChild;
+  sheet._update(sheet.css);  // the same text again: nothing to re-parse
+  const kept = sheet.el.firstChild === node;
+  sheet._update(".amra-probe { color: blue; }");
+  return [kept, sheet.el.firstChild !== node && sheet.css.includes("blue")];
+}"""
+
+
+def test_a_streaming_page_sends_back_only_its_drawing_confirmations(watched_page, dashboard_url):
+    """While a run streams, the page tells the server which batches it has drawn and nothing more:
+    the plot ranges it recomputes each drawing stay in the browser (a message per range and
+    drawing otherwise, on the event loop all sessions share). And BokehJS's same-text stylesheet
+    updates (thousands per second of a run) no longer make the browser re-parse the sheet."""
+    page = watched_page
+    page.add_init_script(_RECORD_SENDS_JS)
+    open_dashboard(page, dashboard_url + "?run_s=6&speed=1")
+    assert page.evaluate(_SAME_CSS_JS) == [True, True]
+    page.locator(".amra-run button").click()
+    wait_for(lambda: (streamed(page)[1] or 0) > 1.0, 60, what="1 s of run")
+    page.evaluate("() => { window.__amraSends = []; }")
+    wait_for(lambda: (streamed(page)[1] or 0) > 3.0, 60, what="3 s of run")
+    events = [ev for text in page.evaluate("() => window.__amraSends") if text.startswith('{"events"')
+              for ev in json.loads(text)["events"]]
+    attrs = {(ev.get("kind"), ev.get("attr")) for ev in events}
+    assert ("ModelChanged", "tags") in attrs, attrs  # the drawn-batch count (flow control)
+    assert not {a for _, a in attrs} & {"start", "end"}, attrs
+    # the ranges still follow the data: the shared time axis reaches the newest streamed point
+    t_last = streamed(page)[1]
+    ends = page.evaluate("""() => [...Bokeh.documents[0].all_models]
+        .filter(m => m.type === 'DataRange1d').map(m => m.end)""")
+    assert ends and max(ends) >= t_last - 0.5, (ends, t_last)
     assert page.amra_errors == []
 
 
