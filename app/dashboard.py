@@ -9,6 +9,7 @@ map subscription (:meth:`Dashboard.close`).
 """
 from __future__ import annotations
 
+import html
 import logging
 import queue
 import time
@@ -32,6 +33,7 @@ from .rotor_upload import UploadError, parse_rotor_upload
 from .run_worker import RunWorker
 from .settings import ServerSettings
 from .streams import TimeHistories, columns_from_rows, frame_from_rows
+from .live_text import LiveText
 from .verdict_card import VerdictCard
 
 PUMP_MS = 25  #: pump period [ms]: more than twice the worker's chunk rate, so each chunk is sent on its own
@@ -43,6 +45,11 @@ CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", 
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)
 log = logging.getLogger("amra.dashboard")
+
+
+def _run_html(text: str) -> str:
+    """The run status line: "Run:" and what the run is doing."""
+    return f"<b>Run:</b> {html.escape(text)}"
 
 
 def _same_gj(a: float, b: float) -> bool:
@@ -72,8 +79,8 @@ class Dashboard(pn.viewable.Viewer):
         self.messages: list = []
         self.alert = pn.pane.Alert("", alert_type="danger", visible=False, sizing_mode="stretch_width",
                                    name="messages")
-        self.run_status = pn.pane.Markdown("**Run:** idle", name="run-status")
-        self.live_note = pn.pane.Markdown("", name="live-note")
+        self.run_status = LiveText(_run_html("idle"), name="run-status", css_class="amra-run-status")
+        self.live_note = LiveText("", name="live-note", css_class="amra-live-note")
         self._ticks = 0
         self._run_text_at = 0.0
         self._verdict_at = -1e9
@@ -119,7 +126,7 @@ class Dashboard(pn.viewable.Viewer):
         self._verdict_at = -1e9
         self.current_run = self.worker.run_id + 1  # before the thread can post anything
         self.worker.start(case, self.controls.speed)
-        self.run_status.object = "**Run:** starting ..."
+        self.run_status.object = _run_html("starting ...")
         return True
 
     def stop_run(self, event=None) -> None:
@@ -134,7 +141,7 @@ class Dashboard(pn.viewable.Viewer):
         self.verdict.reset()
         self.messages.clear()
         self.alert.visible = False
-        self.run_status.object = "**Run:** idle"
+        self.run_status.object = _run_html("idle")
 
     def run_ladder(self, event=None) -> None:
         try:
@@ -336,10 +343,8 @@ class Dashboard(pn.viewable.Viewer):
         return n
 
     def _run_text(self, text: str) -> None:
-        obj = f"**Run:** {text}"
         self._run_text_at = time.perf_counter()
-        if self.run_status.object != obj:
-            self.run_status.object = obj
+        self.run_status.object = _run_html(text)  # (a same-text set sends nothing)
 
     # ------------------------------------------------------------------ exports
     def history_csv(self):

@@ -15,6 +15,7 @@ factor (the number of sessions following a map, halved), and at once when the ma
 from __future__ import annotations
 
 import csv
+import html
 import io
 import math
 import time
@@ -28,6 +29,8 @@ from bokeh.plotting import figure
 
 from amra_core.boundary import MapSpec, cell_class
 from amra_core.stability import CellResult
+
+from .live_text import LiveText
 
 CG_LABEL = "CG [% chord]"
 GJ_LABEL = "GJ [N m²/rad]"
@@ -91,7 +94,7 @@ class MapView(pn.viewable.Viewer):
         self._drawn = 0  #: cells in the plot's source
         self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", name="map-progress",
                                                bar_color="info")
-        self.status = pn.pane.Markdown("Map: waiting ...", name="map-status")
+        self.status = LiveText("Map: waiting ...", name="map-status", css_class="amra-map-status")  # (app.live_text)
         self._lines_key = None
         self._undrawn = False  #: cells received but not drawn yet
         self._drawn_at = -1e9
@@ -148,12 +151,11 @@ class MapView(pn.viewable.Viewer):
         state = {"queued": queued, "running": "computing", "done": "complete",
                  "cancelled": "cancelled", "failed": f"failed: {snap['error']}",
                  "busy": snap["error"]}[snap["state"]]
-        text = (f"**Map** ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): {state}; "
-                f"{snap['n']} cells ({snap['cached']} from the store) of about {total}")
+        text = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
+                f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}")
         if snap.get("notice"):  # the store could not be used or written (server_limits.open_store)
-            text += f"\n\n**Result store:** {snap['notice']}"
-        if self.status.object != text:
-            self.status.object = text
+            text += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
+        self.status.object = text  # (a same-text set sends nothing)
         related = self.registry.related(spec)
         lines = {}
         for fid, job in related.items():

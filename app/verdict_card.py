@@ -6,6 +6,8 @@ import html
 
 import panel as pn
 
+from .live_text import LiveText
+
 COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "divergence": "#ef6c00", "overspeed": "#6a1b9a",
            "no-autorotation": "#5d4037", "numerical-failure": "#424242"}
 
@@ -37,7 +39,8 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "") -
 class VerdictCard(pn.viewable.Viewer):
     def __init__(self, **params):
         super().__init__(**params)
-        self.pane = pn.pane.HTML(verdict_html(None, False), sizing_mode="stretch_width", name="verdict")
+        # a Div, not an HTML pane: the "so far" card changes while a run streams (app.live_text)
+        self.pane = LiveText(verdict_html(None, False), name="verdict")
         self.verdict = None
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
