@@ -222,8 +222,37 @@ def niced_chromium(niceness: int) -> str:
 
 
 # ---------------------------------------------------------------------------- one session
-async def session(browser, url: str, moves: int, timeout_s: float, index: int, stagger_s: float) -> dict:
+class Settled:
+    """Holds the slider moves until every session streams (or has failed): ``--settled``. Without
+    it, the first sessions move their sliders while the later ones still load their pages, and
+    each page build holds the server's event loop (app.layout), so those moves measure arrival."""
+
+    def __init__(self, sessions: int):
+        self.left = sessions
+        self.event = asyncio.Event()
+
+    def arrive(self) -> None:
+        self.left -= 1
+        if self.left <= 0:
+            self.event.set()
+
+    async def wait(self, timeout_s: float) -> None:
+        try:
+            await asyncio.wait_for(self.event.wait(), timeout_s)
+        except asyncio.TimeoutError:
+            pass
+
+
+async def session(browser, url: str, moves: int, timeout_s: float, index: int, stagger_s: float,
+                  settled: "Settled | None" = None) -> dict:
     await asyncio.sleep(index * stagger_s)
+    arrived = False
+
+    def arrive():
+        nonlocal arrived
+        if settled is not None and not arrived:
+            arrived = True
+            settled.arrive()
     out = {"latencies_s": [], "moves": [], "run_first_s": None, "load_s": None, "errors": []}
     ctx = await browser.new_context(viewport={"width": 1400, "height": 1000})
     page = await ctx.new_page()
@@ -245,6 +274,9 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
             out["errors"].append("no streamed point after Run")
             return out
         out["run_first_s"] = first / 1000
+        if settled is not None:
+            arrive()
+            await settled.wait(timeout_s)
         handle = page.locator(".amra-gj-slider .noUi-handle").first
         for k in range(moves):
             await page.wait_for_timeout(800)
@@ -272,6 +304,7 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
     except Exception as exc:  # noqa: BLE001 - a timeout or a crashed page is an error of the session
         out["errors"].append(f"{type(exc).__name__}: {str(exc).splitlines()[0][:200]}")
     finally:
+        arrive()  # a failed session must not hold the others
         if out.pop("ws_closed", False):
             out["errors"].append("websocket closed during the session")
         out["page"] = page
@@ -309,7 +342,7 @@ def _pct(xs, q):
 
 
 async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None, run_s: float = 60.0,
-                    stagger_s: float = 0.25, launch=None) -> dict:
+                    stagger_s: float = 0.25, launch=None, settled: bool = False) -> dict:
     from playwright.async_api import async_playwright
     launch = launch or {"executable_path": CHROMIUM, "args": CHROMIUM_ARGS, "headless": True}
     rss0 = server.rss_mb() if server else None
@@ -333,8 +366,9 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         sep = "&" if "?" in url else "?"
         # each session starts from its own GJ (the map, GJ against CG, is the same case for all), so
         # the GJs the slider moves reach are unique to a session and the server's log lines match them
+        gate = Settled(n) if settled else None
         results = await asyncio.gather(*[session(browser, f"{url}{sep}run_s={run_s:g}&gj={1500 + 10 * i:g}", moves,
-                                                 timeout_s, i, stagger_s) for i in range(n)])
+                                                 timeout_s, i, stagger_s, gate) for i in range(n)])
         wall = time.monotonic() - t0
         client_cpu = cpu_seconds_of("chromium") - client_cpu0
         rss_open = server.rss_mb() if server else None
@@ -354,7 +388,7 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
     out = {"sessions": n, "moves": len(lat), "p50_s": _pct(lat, 0.5), "p95_s": _pct(lat, 0.95),
            "max_s": max(lat) if lat else None, "run_first_p50_s": _pct(firsts, 0.5),
            "run_first_p95_s": _pct(firsts, 0.95), "load_p50_s": _pct(loads, 0.5), "load_p95_s": _pct(loads, 0.95),
-           "errors": len(errors), "error_samples": errors[:5],
+           "errors": len(errors), "error_samples": errors[:5], "settled": settled,
            "wall_s": round(wall, 1),
            # the browsers' share of this machine (they run beside the server on the same cores)
            "client_cpu_cores": round(client_cpu / wall, 2), "machine_cores": os.cpu_count()}
@@ -363,6 +397,7 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         out.update({"server_side_moves": len(srv_lat), "server_side_p50_s": _pct(srv_lat, 0.5),
                     "server_side_p95_s": _pct(srv_lat, 0.95)})
         out.update(split_latencies([m for r in results for m in r["moves"]], server.live_events()))
+        out["move_log"] = [dict(m, session=i) for i, r in enumerate(results) for m in r["moves"]]  # epoch s
         out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
                     "rss_sessions_open_mb": round(rss_open, 1),
                     "server_rss_base_mb": round(main0, 1), "server_rss_peak_mb": round(peak_main[0], 1),
@@ -382,6 +417,9 @@ def main(argv=None) -> int:
     ap.add_argument("--client-nice", type=int, default=0,
                     help="run the browsers at this niceness (e.g. 19: the server's cores go to the server first, "
                          "as if the browsers ran on other machines); default 0, same priority as the server")
+    ap.add_argument("--settled", action="store_true",
+                    help="start the slider moves once every session streams (steady state); by default each "
+                         "session moves as soon as its own run streams, while later sessions still load")
     ap.add_argument("--json", help="write the results here")
     a = ap.parse_args(argv)
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # so the server below is stopped too
@@ -393,7 +431,7 @@ def main(argv=None) -> int:
             if a.client_nice:
                 launch = {"executable_path": niced_chromium(a.client_nice), "args": CHROMIUM_ARGS, "headless": True}
             r = asyncio.run(run_level(n, a.url or server.url, a.moves, a.timeout, server, a.run_s, a.stagger,
-                                      launch=launch))
+                                      launch=launch, settled=a.settled))
             r["client_nice"] = a.client_nice
         finally:
             if server:
