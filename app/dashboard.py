@@ -27,13 +27,13 @@ from .controls import LIVE_PARAMETERS, UPLOADED, Controls
 from .disc_view import DiscView
 from .fan_view import FanView
 from .ladder import LadderView, ladder_cases
+from .live_text import LiveText
 from .map_view import MapView
 from .modes_view import ModesView
 from .rotor_upload import UploadError, parse_rotor_upload
 from .run_worker import RunWorker
 from .settings import ServerSettings
 from .streams import TimeHistories, columns_from_rows, frame_from_rows
-from .live_text import LiveText
 from .verdict_card import VerdictCard
 
 PUMP_MS = 25  #: pump period [ms]: more than twice the worker's chunk rate, so each chunk is sent on its own

@@ -274,8 +274,8 @@ async def session(browser, url: str, moves: int, timeout_s: float, index: int, s
             out["errors"].append("no streamed point after Run")
             return out
         out["run_first_s"] = first / 1000
+        arrive()
         if settled is not None:
-            arrive()
             await settled.wait(timeout_s)
         handle = page.locator(".amra-gj-slider .noUi-handle").first
         for k in range(moves):
