@@ -6,12 +6,16 @@ which are models), so on a served page each one made Bokeh recompute the referen
 in the session's document (about 350), on the event loop that all sessions share. py-spy of the
 server with eight sessions streaming (2026-12-02): pane updates were a quarter of the event loop's
 time, and the users' slider moves queued behind them. A ``text`` change holds no models, so it is
-sent as is.
+sent as is. In the page, the text is set in place, without a layout of the whole page
+(:mod:`app.browser_tuning`, class :data:`~app.browser_tuning.LIVE_TEXT_CLASS`): so a live text
+must change nothing but its text.
 """
 from __future__ import annotations
 
 import panel as pn
 from bokeh.models import Div
+
+from .browser_tuning import LIVE_TEXT_CLASS
 
 
 class LiveText(pn.viewable.Viewer):
@@ -22,7 +26,7 @@ class LiveText(pn.viewable.Viewer):
     def __init__(self, html: str = "", name: str = "", css_class: str = "", **params):
         super().__init__(**params)
         self.div = Div(text=html, sizing_mode="stretch_width", name=name or None,
-                       css_classes=[css_class] if css_class else [])
+                       css_classes=[LIVE_TEXT_CLASS] + ([css_class] if css_class else []))
 
     @property
     def object(self) -> str:

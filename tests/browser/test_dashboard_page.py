@@ -113,6 +113,48 @@ def test_a_streaming_page_sends_back_only_its_drawing_confirmations(watched_page
     assert page.amra_errors == []
 
 
+_COUNT_PAGE_LAYOUTS_JS = """() => {
+  const L = Bokeh.require("models/layouts/layout_dom").LayoutDOMView;
+  const compute = L.prototype.compute_layout;
+  window.__amraLayouts = 0;
+  L.prototype.compute_layout = function () {
+    if (!(this.parent instanceof L)) { window.__amraLayouts += 1; }  // a layout of the whole page
+    return compute.call(this);
+  };
+}"""
+
+_SHOWN_TEXT_JS = """el => [...el.shadowRoot.children].filter(c => c.tagName !== 'STYLE' && c.tagName !== 'LINK')
+  .map(c => c.textContent).join('')"""
+_RUN_STATUS_JS = """() => Bokeh.documents[0].get_model_by_name("run-status").text"""
+
+
+def test_status_texts_change_in_place_without_laying_out_the_page(watched_page, dashboard_url):
+    """The run clock (and the verdict card, the map status) change several times a second; each
+    change shows in the page, and none lays out the whole page again (app.browser_tuning)."""
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?run_s=8&speed=1")
+    page.evaluate(_COUNT_PAGE_LAYOUTS_JS)
+    page.locator(".amra-run button").click()
+    wait_for(lambda: (streamed(page)[1] or 0) > 1.0, 60, what="1 s of run")
+    page.evaluate("() => { window.__amraLayouts = 0; }")
+    texts = set()
+
+    def clock_moved():
+        model_text = page.evaluate(_RUN_STATUS_JS)
+        shown = page.locator(".amra-run-status").evaluate(_SHOWN_TEXT_JS)
+        if "t = " in model_text and model_text != page.evaluate(_RUN_STATUS_JS):
+            return False  # it changed between the two reads
+        if "t = " in model_text:
+            plain = re.sub(r"<[^>]+>", "", model_text)
+            assert plain in shown, (model_text, shown)  # what the server set is what the page shows
+            texts.add(plain)
+        return len(texts) >= 5
+    wait_for(clock_moved, 60, every_s=0.05, what="five run-clock texts")
+    # before: one layout of the whole page per text change (3.9 a second in a run, 2026-12-02)
+    assert page.evaluate("() => window.__amraLayouts") <= 1, texts
+    assert page.amra_errors == []
+
+
 def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_server):
     page = watched_page
     open_dashboard(page, dashboard_server[0] + "?run_s=30&speed=1")
