@@ -9,7 +9,7 @@ from __future__ import annotations
 import holoviews as hv
 import panel as pn
 
-from app import browser_tuning
+from app import browser_tuning, message_tuning
 from app.dashboard import Dashboard
 from app.layout import TITLE
 from app.local_resources import serve_resources_locally
@@ -34,6 +34,7 @@ def create_app():
     if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
         apply_session_query(dash.controls, dash.notify)
         browser_tuning.install(pn.state.curdoc)
+        message_tuning.install()  # once per process: Bokeh keeps the list of synced models
         dash.start_periodic()
 
         def loaded():  # after the first paint
