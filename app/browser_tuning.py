@@ -25,12 +25,28 @@ repaints every plot). The run clock, the verdict card and the map status line
 in a run: 3.9 page layouts a second, 12 % of one page's main thread (CPU profile, one session,
 2026-12-02). Their text is set in place instead; the page's CSS layout moves what follows, as for
 any text, and the plots keep their size, so nothing of Bokeh's layout changes.
+
+A live plot's y axes follow the data, so their tick labels change width ("0.5" -> "0.25") every
+few drawings; each change of an axis's size lays out the whole page again (BokehJS's
+``PlotView._invalidate_layout_if_needed``), 1.1 s of 15 s of a page among eight (CPU profile,
+2026-12-02). The axes of the plots tagged :data:`LIVE_PLOT_TAG` keep the largest size they have
+needed: the page is laid out again only when a label is wider than any before (the axis may then
+keep a few pixels more room than its labels need).
+
+Each streamed batch makes every glyph of a live plot build a search tree of all its points
+(BokehJS's ``GlyphView.index_data``: a Flatbush index, sorted), though a line's hover and tap
+tests do not use it and the auto-ranges need only its bounding box. With 12 000 rows in the page
+(60 s of a run), that was a fifth of an uncontended page's main thread (CPU profile, 2026-12-02),
+and it grows with the rows. In the plots tagged :data:`LIVE_PLOT_TAG`, a point glyph (``x``, ``y``)
+now finds its bounding box in one pass over the points, and builds the tree only when something
+asks it for a search.
 """
 from __future__ import annotations
 
 from bokeh.models import CustomJS
 
 LIVE_TEXT_CLASS = "amra-live-text"  #: a Div whose text alone changes, set in place (module docstring)
+LIVE_PLOT_TAG = "amra-live-plot"  #: a streaming plot: axes that never shrink, a lazy search tree (docstring)
 CSS_CACHE_MS = 30_000  #: how long a looked-up CSS variable of a plot element is reused [ms]
 
 _PATCH_JS = """
@@ -84,6 +100,70 @@ if (DV && !DV.prototype.__amra_live_text) {
     return rerender.call(this);
   };
 }
+let axes = null;
+try { axes = Bokeh.require("models/axes/axis"); } catch (e) { axes = null; }
+const AV = axes ? axes.AxisView : null;
+if (AV && AV.prototype.get_size && !AV.prototype.__amra_steady) {
+  AV.prototype.__amra_steady = true;
+  const get_size = AV.prototype.get_size;
+  AV.prototype.get_size = function () {
+    const size = get_size.call(this);
+    const plot = this.plot_view ? this.plot_view.model : null;
+    if (!plot || !plot.tags.includes(LIVE_PLOT) || (size.width == 0 && size.height == 0)) { return size; }
+    // the largest size this axis has needed: a narrower label does not lay out the page again
+    const kept = this.__amra_size || {width: 0, height: 0};
+    this.__amra_size = {width: Math.max(kept.width, size.width), height: Math.max(kept.height, size.height)};
+    return this.__amra_size;
+  };
+}
+let spatial = null, xy = null;
+try { spatial = Bokeh.require("core/util/spatial"); xy = Bokeh.require("models/glyphs/xy_glyph"); } catch (e) { xy = null; }
+const SI = spatial ? spatial.SpatialIndex : null;
+const XYV = xy ? xy.XYGlyphView : null;
+if (SI && XYV && XYV.prototype.index_data && !XYV.prototype.__amra_lazy_index) {
+  XYV.prototype.__amra_lazy_index = true;
+  const point_index = XYV.prototype._index_data;
+  class LazyIndex extends SI {
+    // the bounding box of the finite points now (what the auto-ranges ask), the tree on a search
+    constructor(view) {
+      super(0);
+      this.view = view;
+      this.tree = null;
+      const {x, y, data_size} = view;
+      let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+      for (let i = 0; i < data_size; i++) {
+        const xi = x[i], yi = y[i];
+        if (!isFinite(xi + yi)) { continue; }
+        if (xi < x0) { x0 = xi; }
+        if (xi > x1) { x1 = xi; }
+        if (yi < y0) { y0 = yi; }
+        if (yi > y1) { y1 = yi; }
+      }
+      this.box = {x0, y0, x1, y1};
+    }
+    built() {
+      if (this.tree === null) {
+        const tree = new SI(this.view._index_size);
+        point_index.call(this.view, tree);
+        tree.finish();
+        this.tree = tree;
+      }
+      return this.tree;
+    }
+    get bbox() { return {...this.box}; }
+    indices(rect) { return this.built().indices(rect); }
+    bounds(rect) { return this.built().bounds(rect); }
+  }
+  const index_data = XYV.prototype.index_data;
+  XYV.prototype.index_data = function () {
+    const plot = this.renderer && this.renderer.plot_view ? this.renderer.plot_view.model : null;
+    if (plot && plot.tags.includes(LIVE_PLOT) && this._index_data === point_index) {
+      this._index = new LazyIndex(this);
+      return;
+    }
+    return index_data.call(this);
+  };
+}
 const canvas = (window.Bokeh && Bokeh.require) ? Bokeh.require("models/plots/plot_canvas") : null;
 const P = canvas ? canvas.PlotView : null;
 const font = P ? Object.getOwnPropertyDescriptor(P.prototype, "base_font_size") : null;
@@ -104,7 +184,8 @@ if (font && font.get && !P.prototype.__amra_font_cache) {
 
 
 def patch_js() -> str:
-    return _PATCH_JS.replace("TTL_MS", str(int(CSS_CACHE_MS))).replace("LIVE_CLASS", repr(LIVE_TEXT_CLASS))
+    return (_PATCH_JS.replace("TTL_MS", str(int(CSS_CACHE_MS))).replace("LIVE_CLASS", repr(LIVE_TEXT_CLASS))
+            .replace("LIVE_PLOT", repr(LIVE_PLOT_TAG)))
 
 
 def install(doc) -> None:

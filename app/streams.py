@@ -46,6 +46,8 @@ from bokeh.plotting import figure
 
 from amra_core.simulation import COL
 
+from .browser_tuning import LIVE_PLOT_TAG
+
 BUFFER_ROWS = 24_000  #: 120 s at 200 rows/s
 ACK_TIMEOUT_S = 1.0  #: a batch not confirmed by the browser within this is followed by the next [s]
 
@@ -242,7 +244,7 @@ class TimeHistories:
             fig = figure(title=title, height=220, sizing_mode="stretch_width", x_range=x_range,
                          y_range=DataRange1d(only_visible=True, syncable=False), tools="pan,wheel_zoom,box_zoom,reset,save",
                          x_axis_label=_axis_label("t_s"), y_axis_label=_axis_label(cols[0]),
-                         output_backend="canvas")
+                         output_backend="canvas", tags=[LIVE_PLOT_TAG])
             items = []
             for col, colour, label in zip(cols, colours, ("blade 0", "blade 1") if len(cols) == 2 else ("current run",)):
                 r = fig.line("t_s", col, source=self.source, line_width=2, color=colour)

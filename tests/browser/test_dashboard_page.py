@@ -155,6 +155,56 @@ def test_status_texts_change_in_place_without_laying_out_the_page(watched_page, 
     assert page.amra_errors == []
 
 
+_COUNT_TREES_JS = """() => {
+  const SI = Bokeh.require("core/util/spatial").SpatialIndex;
+  const finish = SI.prototype.finish;
+  window.__amraTrees = 0;
+  SI.prototype.finish = function () { window.__amraTrees += 1; return finish.call(this); };
+  const source = Bokeh.documents[0].get_model_by_name("amra-time-histories");
+  window.__amraBatches = 0;
+  source.streaming.connect(() => { window.__amraBatches += 1; });
+}"""
+
+_LIVE_RANGES_JS = """() => {
+  const doc = Bokeh.documents[0];
+  const source = doc.get_model_by_name("amra-time-histories");
+  const col = (name) => source.data instanceof Map ? source.data.get(name) : source.data[name];
+  const out = [];
+  for (const m of doc.all_models) {
+    if (!m.tags || !m.tags.includes("amra-live-plot")) { continue; }
+    for (const r of m.renderers) {
+      if (r.data_source !== source) { continue; }
+      const ys = Array.from(col(r.glyph.y.field)), ts = Array.from(col(r.glyph.x.field));
+      out.push({field: r.glyph.y.field, y_min: Math.min(...ys), y_max: Math.max(...ys),
+                start: m.y_range.start, end: m.y_range.end, t_max: Math.max(...ts), x_end: m.x_range.end});
+    }
+  }
+  return out;
+}"""
+
+
+def test_live_plots_range_over_their_data_without_a_search_tree_per_batch(watched_page, dashboard_url):
+    """Each streamed batch used to make every line of the live plots build a search tree of all its
+    points (a fifth of the page's time at 12 000 rows); the ranges need only the bounding box,
+    which is what the page now finds (app.browser_tuning). The ranges must still cover the data."""
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?run_s=30&speed=1")
+    page.evaluate(_COUNT_TREES_JS)
+    page.locator(".amra-run button").click()
+    wait_for(lambda: (streamed(page)[1] or 0) > 3.0, 60, what="3 s of run")
+    page.locator(".amra-stop button").click()
+    page.wait_for_timeout(1500)  # the last batch drawn
+    batches, trees = page.evaluate("() => [window.__amraBatches, window.__amraTrees]")
+    # five lines per batch before; now only the other plots' glyphs (the map's cells, the disc)
+    assert batches >= 5 and trees < batches, (batches, trees)
+    ranges = page.evaluate(_LIVE_RANGES_JS)
+    assert {r["field"] for r in ranges} == {"omega_rad_s", "teeter_deg", "twist0_deg", "twist1_deg", "descent_m_s"}
+    for r in ranges:
+        assert r["start"] <= r["y_min"] and r["end"] >= r["y_max"], r
+        assert r["x_end"] >= r["t_max"], r
+    assert page.amra_errors == []
+
+
 def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_server):
     page = watched_page
     open_dashboard(page, dashboard_server[0] + "?run_s=30&speed=1")
