@@ -40,6 +40,10 @@ tests do not use it and the auto-ranges need only its bounding box. With 12 000 
 and it grows with the rows. In the plots tagged :data:`LIVE_PLOT_TAG`, a point glyph (``x``, ``y``)
 now finds its bounding box in one pass over the points, and builds the tree only when something
 asks it for a search.
+
+And each glyph takes its columns through its view's index set (``BitSet.select``: a list of the
+set indices, then a gather into a new array), though a live plot's view selects every row: 7 % of
+the same page's time. When every index is set, the same new array is made with a plain copy.
 """
 from __future__ import annotations
 
@@ -162,6 +166,20 @@ if (SI && XYV && XYV.prototype.index_data && !XYV.prototype.__amra_lazy_index) {
       return;
     }
     return index_data.call(this);
+  };
+}
+let bitset = null;
+try { bitset = Bokeh.require("core/util/bitset"); } catch (e) { bitset = null; }
+const BS = bitset ? bitset.BitSet : null;
+if (BS && BS.prototype.select && !BS.prototype.__amra_all_set) {
+  BS.prototype.__amra_all_set = true;
+  const select = BS.prototype.select;
+  BS.prototype.select = function (array) {
+    // every index set: the selection is the whole array, in order (a copy, as before)
+    if (this.size == array.length && this.count == this.size && typeof array.slice === "function") {
+      return array.slice();
+    }
+    return select.call(this, array);
   };
 }
 const canvas = (window.Bokeh && Bokeh.require) ? Bokeh.require("models/plots/plot_canvas") : null;
