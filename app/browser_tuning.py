@@ -44,6 +44,18 @@ asks it for a search.
 And each glyph takes its columns through its view's index set (``BitSet.select``: a list of the
 set indices, then a gather into a new array), though a live plot's view selects every row: 7 % of
 the same page's time. When every index is set, the same new array is made with a plain copy.
+
+Last, the lines themselves: without a GPU the browser strokes a path in software, about 2 ms per
+1000 points and worse beyond (90 ms for 24 000 points on a 1300 px canvas, measured in this
+Chromium), and a live plot holds up to 24 000 rows on about 1200 pixel columns. A line of a live
+plot with more than two points per device pixel column is drawn through the M4 reduction (Jugel
+et al., "M4: a visualization-oriented time series data aggregation", VLDB 2014): in each pixel
+column, its first, lowest, highest and last point, in their order. That draws the line of all
+the points but for antialiasing at the joins: of a 24 000-point line's pixels, 0.1 % (a growing
+1/rev-like oscillation) to 0.6 % (a line with gaps) differ by more than a quarter of full intensity
+(``tests/browser`` compares the pixels). A line whose x goes back is drawn as BokehJS draws it;
+gaps and non-finite values break the line as before. Measured in one page (60 s into a run,
+11 600 rows): 52 ms of renderer CPU per update against 83 ms without (4 400 rows: 51 against 59).
 """
 from __future__ import annotations
 
@@ -180,6 +192,61 @@ if (BS && BS.prototype.select && !BS.prototype.__amra_all_set) {
       return array.slice();
     }
     return select.call(this, array);
+  };
+}
+const m4_path = function (ctx, sx, sy, indices, dpr) {
+  // the M4 path of a line whose x never decreases; false (and nothing worth keeping) otherwise
+  let col = NaN, first = -1, last = -1, lo = -1, hi = -1, prev = -2, move = true, last_x = -Infinity;
+  const emit = (i) => { if (move) { ctx.moveTo(sx[i], sy[i]); move = false; } else { ctx.lineTo(sx[i], sy[i]); } };
+  const flush = () => {
+    if (first < 0) { return; }
+    const picks = [first, lo, hi, last].sort((a, b) => a - b);
+    let done = -1;
+    for (const i of picks) { if (i !== done) { emit(i); done = i; } }
+    first = -1;
+  };
+  ctx.beginPath();
+  for (const i of indices) {
+    const x = sx[i], y = sy[i];
+    if (!isFinite(x + y)) { flush(); move = true; prev = i; continue; }
+    if (prev !== -2 && i - prev !== 1) { flush(); move = true; }  // a gap in the indices
+    if (x < last_x) { return false; }
+    last_x = x;
+    const c = Math.floor(x * dpr);
+    if (first < 0 || c !== col) {
+      flush();
+      col = c; first = last = lo = hi = i;
+    } else {
+      last = i;
+      if (y < sy[lo]) { lo = i; }
+      if (y > sy[hi]) { hi = i; }
+    }
+    prev = i;
+  }
+  flush();
+  return true;
+};
+window.__amraM4Path = m4_path;  // for the browser tests
+let lines = null;
+try { lines = Bokeh.require("models/glyphs/line"); } catch (e) { lines = null; }
+const LV = lines ? lines.LineView : null;
+if (LV && LV.prototype._paint && !LV.prototype.__amra_m4) {
+  LV.prototype.__amra_m4 = true;
+  const paint = LV.prototype._paint;
+  LV.prototype._paint = function (ctx, indices, data) {
+    const plot = this.renderer && this.renderer.plot_view ? this.renderer.plot_view.model : null;
+    const n = indices.count !== undefined ? indices.count : indices.length;
+    const dpr = window.devicePixelRatio || 1;
+    const width = ctx.canvas ? ctx.canvas.width : Infinity;  // device pixels
+    if (plot && plot.tags.includes(LIVE_PLOT) && this.parent.nonselection_glyph != this && n > 2 * width) {
+      const {sx, sy} = {...this, ...data};
+      if (m4_path(ctx, sx, sy, indices, dpr)) {
+        this.visuals.line.set_value(ctx);
+        ctx.stroke();
+        return;
+      }
+    }
+    return paint.call(this, ctx, indices, data);
   };
 }
 const canvas = (window.Bokeh && Bokeh.require) ? Bokeh.require("models/plots/plot_canvas") : null;
