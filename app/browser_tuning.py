@@ -48,7 +48,7 @@ the same page's time. When every index is set, the same new array is made with a
 Last, the lines themselves: without a GPU the browser strokes a path in software, about 2 ms per
 1000 points and worse beyond (90 ms for 24 000 points on a 1300 px canvas, measured in this
 Chromium), and a live plot holds up to 24 000 rows on about 1200 pixel columns. A line of a live
-plot with more than two points per device pixel column is drawn through the M4 reduction (Jugel
+plot with more than twice as many points as its canvas has device pixel columns is drawn through the M4 reduction (Jugel
 et al., "M4: a visualization-oriented time series data aggregation", VLDB 2014): in each pixel
 column, its first, lowest, highest and last point, in their order. That draws the line of all
 the points but for antialiasing at the joins: of a 24 000-point line's pixels, 0.1 % (a growing
@@ -66,7 +66,14 @@ LIVE_PLOT_TAG = "amra-live-plot"  #: a streaming plot: axes that never shrink, a
 CSS_CACHE_MS = 30_000  #: how long a looked-up CSS variable of a plot element is reused [ms]
 
 _PATCH_JS = """
-const mod = (window.Bokeh && Bokeh.require) ? Bokeh.require("core/visuals/visual") : null;
+const need = (name) => {  // a BokehJS module, or null (a Bokeh without it: that patch is left out)
+  try { return (window.Bokeh && Bokeh.require) ? Bokeh.require(name) : null; } catch (e) { return null; }
+};
+const in_live_plot = (plot_view) => {
+  const plot = plot_view != null ? plot_view.model : null;
+  return plot != null && plot.tags != null && plot.tags.includes(LIVE_PLOT);
+};
+const mod = need("core/visuals/visual");
 const V = mod ? mod.VisualProperties : null;
 if (V && !V.prototype.__amra_css_cache) {
   const lookup = V.prototype._get_css_value;
@@ -88,7 +95,7 @@ if (V && !V.prototype.__amra_css_cache) {
     return value;
   };
 }
-const dom = (window.Bokeh && Bokeh.require) ? Bokeh.require("core/dom") : null;
+const dom = need("core/dom");
 const IS = dom ? dom.InlineStyleSheet : null;
 if (IS && IS.prototype._update && !IS.prototype.__amra_same_css) {
   IS.prototype.__amra_same_css = true;
@@ -99,8 +106,7 @@ if (IS && IS.prototype._update && !IS.prototype.__amra_same_css) {
     if (this.el.textContent !== css) { update.call(this, css); }
   };
 }
-let divs = null;
-try { divs = Bokeh.require("models/widgets/div"); } catch (e) { divs = null; }
+const divs = need("models/widgets/div");
 const DV = divs ? divs.DivView : null;
 if (DV && !DV.prototype.__amra_live_text) {
   DV.prototype.__amra_live_text = true;
@@ -116,24 +122,21 @@ if (DV && !DV.prototype.__amra_live_text) {
     return rerender.call(this);
   };
 }
-let axes = null;
-try { axes = Bokeh.require("models/axes/axis"); } catch (e) { axes = null; }
+const axes = need("models/axes/axis");
 const AV = axes ? axes.AxisView : null;
 if (AV && AV.prototype.get_size && !AV.prototype.__amra_steady) {
   AV.prototype.__amra_steady = true;
   const get_size = AV.prototype.get_size;
   AV.prototype.get_size = function () {
     const size = get_size.call(this);
-    const plot = this.plot_view ? this.plot_view.model : null;
-    if (!plot || !plot.tags.includes(LIVE_PLOT) || (size.width == 0 && size.height == 0)) { return size; }
+    if (!in_live_plot(this.plot_view) || (size.width == 0 && size.height == 0)) { return size; }
     // the largest size this axis has needed: a narrower label does not lay out the page again
     const kept = this.__amra_size || {width: 0, height: 0};
     this.__amra_size = {width: Math.max(kept.width, size.width), height: Math.max(kept.height, size.height)};
     return this.__amra_size;
   };
 }
-let spatial = null, xy = null;
-try { spatial = Bokeh.require("core/util/spatial"); xy = Bokeh.require("models/glyphs/xy_glyph"); } catch (e) { xy = null; }
+const spatial = need("core/util/spatial"), xy = need("models/glyphs/xy_glyph");
 const SI = spatial ? spatial.SpatialIndex : null;
 const XYV = xy ? xy.XYGlyphView : null;
 if (SI && XYV && XYV.prototype.index_data && !XYV.prototype.__amra_lazy_index) {
@@ -172,16 +175,14 @@ if (SI && XYV && XYV.prototype.index_data && !XYV.prototype.__amra_lazy_index) {
   }
   const index_data = XYV.prototype.index_data;
   XYV.prototype.index_data = function () {
-    const plot = this.renderer && this.renderer.plot_view ? this.renderer.plot_view.model : null;
-    if (plot && plot.tags.includes(LIVE_PLOT) && this._index_data === point_index) {
+    if (in_live_plot(this.renderer ? this.renderer.plot_view : null) && this._index_data === point_index) {
       this._index = new LazyIndex(this);
       return;
     }
     return index_data.call(this);
   };
 }
-let bitset = null;
-try { bitset = Bokeh.require("core/util/bitset"); } catch (e) { bitset = null; }
+const bitset = need("core/util/bitset");
 const BS = bitset ? bitset.BitSet : null;
 if (BS && BS.prototype.select && !BS.prototype.__amra_all_set) {
   BS.prototype.__amra_all_set = true;
@@ -200,9 +201,12 @@ const m4_path = function (ctx, sx, sy, indices, dpr) {
   const emit = (i) => { if (move) { ctx.moveTo(sx[i], sy[i]); move = false; } else { ctx.lineTo(sx[i], sy[i]); } };
   const flush = () => {
     if (first < 0) { return; }
-    const picks = [first, lo, hi, last].sort((a, b) => a - b);
-    let done = -1;
-    for (const i of picks) { if (i !== done) { emit(i); done = i; } }
+    // first <= lo, hi <= last (indices in time order): the four in their order, each once
+    const a = Math.min(lo, hi), b = Math.max(lo, hi);
+    emit(first);
+    if (a !== first) { emit(a); }
+    if (b !== a) { emit(b); }
+    if (last !== b) { emit(last); }
     first = -1;
   };
   ctx.beginPath();
@@ -227,20 +231,18 @@ const m4_path = function (ctx, sx, sy, indices, dpr) {
   return true;
 };
 window.__amraM4Path = m4_path;  // for the browser tests
-let lines = null;
-try { lines = Bokeh.require("models/glyphs/line"); } catch (e) { lines = null; }
+const lines = need("models/glyphs/line");
 const LV = lines ? lines.LineView : null;
 if (LV && LV.prototype._paint && !LV.prototype.__amra_m4) {
   LV.prototype.__amra_m4 = true;
   const paint = LV.prototype._paint;
   LV.prototype._paint = function (ctx, indices, data) {
-    const plot = this.renderer && this.renderer.plot_view ? this.renderer.plot_view.model : null;
     const n = indices.count !== undefined ? indices.count : indices.length;
-    const dpr = window.devicePixelRatio || 1;
     const width = ctx.canvas ? ctx.canvas.width : Infinity;  // device pixels
-    if (plot && plot.tags.includes(LIVE_PLOT) && this.parent.nonselection_glyph != this && n > 2 * width) {
+    if (in_live_plot(this.renderer ? this.renderer.plot_view : null) && this.parent.nonselection_glyph != this
+        && n > 2 * width) {
       const {sx, sy} = {...this, ...data};
-      if (m4_path(ctx, sx, sy, indices, dpr)) {
+      if (m4_path(ctx, sx, sy, indices, window.devicePixelRatio || 1)) {
         this.visuals.line.set_value(ctx);
         ctx.stroke();
         return;
@@ -249,7 +251,7 @@ if (LV && LV.prototype._paint && !LV.prototype.__amra_m4) {
     return paint.call(this, ctx, indices, data);
   };
 }
-const canvas = (window.Bokeh && Bokeh.require) ? Bokeh.require("models/plots/plot_canvas") : null;
+const canvas = need("models/plots/plot_canvas");
 const P = canvas ? canvas.PlotView : null;
 const font = P ? Object.getOwnPropertyDescriptor(P.prototype, "base_font_size") : null;
 if (font && font.get && !P.prototype.__amra_font_cache) {
