@@ -22,7 +22,7 @@ def history_csv(history: np.ndarray | None) -> io.StringIO:
 
 def download(label: str, filename: str, callback: Callable[[], io.StringIO]) -> pn.widgets.FileDownload:
     return pn.widgets.FileDownload(callback=callback, filename=filename, label=label, button_type="default",
-                                   sizing_mode="stretch_width", name=filename)
+                                   sizing_mode="stretch_width")
 
 
 def export_bar(history: Callable, modes: Callable, cells: Callable) -> pn.Column:
