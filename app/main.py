@@ -9,7 +9,7 @@ from __future__ import annotations
 import holoviews as hv
 import panel as pn
 
-from app import browser_tuning, message_tuning
+from app import browser_tuning, message_tuning, socket_tuning
 from app.dashboard import Dashboard
 from app.layout import TITLE
 from app.local_resources import serve_resources_locally
@@ -35,6 +35,7 @@ def create_app():
         apply_session_query(dash.controls, dash.notify)
         browser_tuning.install(pn.state.curdoc)
         message_tuning.install()  # once per process: Bokeh keeps the list of synced models
+        socket_tuning.install()  # once per process: a message's frames are written in one go
         dash.start_periodic()
 
         def loaded():  # after the first paint
