@@ -56,6 +56,14 @@ the points but for antialiasing at the joins: of a 24 000-point line's pixels, 0
 (``tests/browser`` compares the pixels). A line whose x goes back is drawn as BokehJS draws it;
 gaps and non-finite values break the line as before. Measured in one page (60 s into a run,
 11 600 rows): 52 ms of renderer CPU per update against 83 ms without (4 400 rows: 51 against 59).
+
+And the sliders. This app's server uses a slider's value only once the handle is released (Panel's
+``config.throttled``), but BokehJS sends the value at every step of a drag as well: five messages
+for one slider move, each of which the server must read, apply and answer, one after another on
+the page's connection, before it reads the release. On a loaded server (eight browsers on two
+cores) the release reached the server 0.5-0.9 s after the pointer went up (p50; ``scripts/load_test.py``,
+2026-12-02). With ``install(doc, sliders_on_release=True)``, a drag updates the slider's value in
+the page (its title shows it as before) without sending it; the release sends it, once.
 """
 from __future__ import annotations
 
@@ -267,14 +275,26 @@ if (font && font.get && !P.prototype.__amra_font_cache) {
     },
   });
 }
+const sliders = need("models/widgets/sliders/abstract_slider");
+const SV = sliders ? sliders.AbstractSliderView : null;
+if (SLIDERS_ON_RELEASE && SV && SV.prototype._slide && !SV.prototype.__amra_on_release) {
+  SV.prototype.__amra_on_release = true;
+  SV.prototype._slide = function (values) {  // while dragging: shown in the page, not sent
+    this.model.setv({value: this._calc_from(values)}, {sync: false});
+  };  // on release, BokehJS's _change sets value_throttled (and value): that is sent
+}
 """
 
 
-def patch_js() -> str:
+def patch_js(sliders_on_release: bool = False) -> str:
     return (_PATCH_JS.replace("TTL_MS", str(int(CSS_CACHE_MS))).replace("LIVE_CLASS", repr(LIVE_TEXT_CLASS))
-            .replace("LIVE_PLOT", repr(LIVE_PLOT_TAG)))
+            .replace("LIVE_PLOT", repr(LIVE_PLOT_TAG))
+            .replace("SLIDERS_ON_RELEASE", "true" if sliders_on_release else "false"))
 
 
-def install(doc) -> None:
-    """Run the patch in the browser when ``doc`` is ready (a served session's document)."""
-    doc.js_on_event("document_ready", CustomJS(code=patch_js()))
+def install(doc, sliders_on_release: bool = False) -> None:
+    """Run the patch in the browser when ``doc`` is ready (a served session's document).
+
+    ``sliders_on_release``: the server uses a slider's value only when the handle is released
+    (Panel's ``config.throttled``), so a dragged slider sends nothing until then (module docstring)."""
+    doc.js_on_event("document_ready", CustomJS(code=patch_js(sliders_on_release)))

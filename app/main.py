@@ -33,7 +33,7 @@ def create_app():
     page = dash.__panel__()
     if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
         apply_session_query(dash.controls, dash.notify)
-        browser_tuning.install(pn.state.curdoc)
+        browser_tuning.install(pn.state.curdoc, sliders_on_release=pn.config.throttled)
         message_tuning.install()  # once per process: Bokeh keeps the list of synced models
         socket_tuning.install()  # once per process: a message's frames are written in one go
         dash.start_periodic()

@@ -323,6 +323,49 @@ def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_se
     wait_for(lambda: not d.worker.running, 20, what="the stop")
 
 
+def _value_events(page) -> list:
+    """The slider-value changes the page has sent: (attr, new) of each ModelChanged."""
+    return [(ev["attr"], ev["new"]) for text in page.evaluate("() => window.__amraSends")
+            if text.startswith('{"events"') for ev in json.loads(text)["events"]
+            if ev.get("kind") == "ModelChanged" and ev.get("attr") in ("value", "value_throttled")]
+
+
+def test_a_dragged_slider_sends_its_value_once_on_release(watched_page, dashboard_server):
+    """The server uses a slider's value on release only (Panel's throttled config), so a drag shows
+    its value in the page step by step and sends nothing until the release, which sends it once."""
+    page = watched_page
+    page.add_init_script(_RECORD_SENDS_JS)
+    open_dashboard(page, dashboard_server[0])
+    d = _session(dashboard_server)
+    assert d.controls.gj_nm2 == 1500
+    handle = page.locator(".amra-gj-slider .noUi-handle").first
+    box = handle.bounding_box()
+    x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    page.evaluate("() => { window.__amraSends = []; }")
+    title = page.locator(".amra-gj-slider .bk-slider-title").first
+    title0 = title.inner_text()
+    page.mouse.move(x, y)
+    page.mouse.down()
+    titles = []
+    for k in range(1, 6):
+        page.mouse.move(x + 12 * k, y)
+        titles.append(title.inner_text())
+    page.wait_for_timeout(300)
+    during = _value_events(page)
+    page.mouse.up()
+    wait_for(lambda: d.controls.gj_nm2 != 1500, 15, what="the release to reach the server")
+    page.wait_for_timeout(300)
+    after = _value_events(page)
+    assert during == [], during  # nothing sent while dragging
+    assert len(set(titles)) == 5 and title0 not in titles, (title0, titles)  # but the page showed each step
+    assert [a for a, _ in after] == ["value_throttled"], after  # one message on release
+    shown = 10 ** after[0][1]
+    assert d.controls.gj_nm2 == pytest.approx(shown, rel=1e-3) and d.controls.gj_nm2 > 1500
+    shown_in_title = float(title.inner_text().rsplit(":", 1)[1])  # "GJ (log scale) [N m²/rad]: 6.10e+3"
+    assert shown_in_title == pytest.approx(shown, rel=5e-3), (shown, title.inner_text())
+    assert page.amra_errors == []
+
+
 def test_fig10_preset_ends_unstable(watched_page, dashboard_url):
     page = watched_page
     open_dashboard(page, dashboard_url + "?preset=fig10&run_s=6&speed=6")
