@@ -365,6 +365,9 @@ class Dashboard(pn.viewable.Viewer):
         self.histories.enable_flow_control()  # a browser is attached: send what it can draw
         from .server_limits import get_stream_budget
         self.budget = get_stream_budget()
+        if pn.state.curdoc is not None and pn.state.curdoc.session_context is not None:
+            from .loop_watch import start_once
+            start_once(pn.state.curdoc, self.budget)  # the budget follows the event loop's lag
         from panel.io.callbacks import PeriodicCallback
         # background: a periodic pump must not flag the page busy (the busy indicator would send
         # two extra messages per tick and the page would look permanently loading)

@@ -152,16 +152,36 @@ def stream_budget_hz(default: float = DEFAULT_STREAM_BUDGET_HZ) -> float:
     return v if 10.0 <= v <= 10000.0 else default
 
 
+LAG_HIGH_S = 0.15  #: smoothed event-loop lag above which the stream budget is cut [s]
+LAG_LOW_S = 0.05  #: smoothed event-loop lag below which the stream budget grows back [s]
+ADJUST_PERIOD_S = 0.5  #: the budget changes at most this often [s]
+MIN_SESSION_HZ = 1.0  #: the budget never gives a streaming session fewer updates than this per second
+
+
 class StreamBudget:
     """The server's live-plot updates per second, shared by the sessions streaming a run.
 
-    With ``n`` sessions streaming, each sends an update at most every ``n / total_hz`` seconds
+    With ``n`` sessions streaming, each sends an update at most every ``n / rate_hz`` seconds
     (:meth:`min_interval_s`): 160 /s serves 8 sessions at the full chunk rate (about 17 /s), 16 at
     10 /s, 32 at 5 /s, and the event loop's share spent on streaming stays bounded. A session's
-    browser that draws more slowly gets fewer (flow control, :mod:`app.streams`)."""
+    browser that draws more slowly gets fewer (flow control, :mod:`app.streams`).
+
+    ``rate_hz`` follows the event loop's lag (:meth:`observe_lag`, fed by :mod:`app.loop_watch`):
+    when the loop's smoothed lag exceeds :data:`LAG_HIGH_S`, the rate is cut by 30 %; below
+    :data:`LAG_LOW_S` it grows by 10 %, up to ``total_hz``; at most every :data:`ADJUST_PERIOD_S`,
+    and never below :data:`MIN_SESSION_HZ` per streaming session. Why: a slider release waits for
+    the loop to read it, and on a saturated machine the loop waits for a core. With eight
+    browsers on the server's two cores, the loop was runnable but not running for 13.5 of the
+    16.6 s in which it lagged more than 50 ms (``/proc`` schedstat of the loop's thread,
+    2026-12-02), and each browser's drawing of an update takes about 50 ms of CPU. Fewer updates
+    leave the loop its core; on a server whose users' browsers run elsewhere, they cut the
+    server's own streaming work the same way."""
 
     def __init__(self, total_hz: float = DEFAULT_STREAM_BUDGET_HZ):
         self.total_hz = float(total_hz)
+        self.rate_hz = float(total_hz)  #: the updates per second now (<= total_hz)
+        self.lag_s = 0.0  #: smoothed event-loop lag [s]
+        self._adjusted_at = -1e9
         self._lock = threading.Lock()
         self._streaming: set = set()
 
@@ -180,7 +200,24 @@ class StreamBudget:
 
     def min_interval_s(self) -> float:
         """Shortest wall-clock interval between one session's updates now [s]."""
-        return self.streaming / self.total_hz
+        return self.streaming / self.rate_hz
+
+    def observe_lag(self, lag_s: float, now_s: float) -> None:
+        """One sample of the event loop's lag [s] (how late a timed wake-up ran), at ``now_s``
+        (monotonic) [s]: smoothed, and the rate adjusted (class docstring)."""
+        self.lag_s += 0.3 * (max(0.0, float(lag_s)) - self.lag_s)
+        if now_s - self._adjusted_at < ADJUST_PERIOD_S:
+            return
+        floor_hz = max(2.0, MIN_SESSION_HZ * self.streaming)
+        if self.lag_s > LAG_HIGH_S:
+            rate = max(min(floor_hz, self.total_hz), 0.7 * self.rate_hz)
+        elif self.lag_s < LAG_LOW_S:
+            rate = min(self.total_hz, 1.1 * self.rate_hz)
+        else:
+            return
+        if rate != self.rate_hz:
+            self.rate_hz = rate
+            self._adjusted_at = now_s
 
     def load_factor(self) -> float:
         """1 with one or two sessions streaming, n/2 with n: the factor by which each session

@@ -17,6 +17,7 @@ from bokeh.protocol import Protocol
 from bokeh.protocol.message import Message
 
 from app import socket_tuning
+from event_loops import run_coroutine
 
 COLUMNS = "abcdefg"  # as many columns as the live plots' source
 
@@ -119,7 +120,7 @@ def test_a_streamed_batch_arrives_as_bokehs_frames_in_a_few_turns(rows, plain, m
             server.stop()
         return rec.written, bokeh_bytes, sent, turns, got, bokeh_turns, got_again, ours, writes[len(ours):]
 
-    written, bokeh_bytes, sent, turns, got, bokeh_turns, got_again, ours, bokehs = asyncio.run(go())
+    written, bokeh_bytes, sent, turns, got, bokeh_turns, got_again, ours, bokehs = run_coroutine(go())
     assert written == expected and got == expected and got_again == expected  # same frames, same order
     assert sent == bokeh_bytes == sum(len(d) for d in expected)
     assert sum(ours) == sum(bokehs) and len(bokehs) == len(expected)  # the same bytes on the wire
@@ -146,4 +147,4 @@ def test_a_closed_socket_raises_as_bokehs_send_does():
             return "closed"
         return "sent"
 
-    assert asyncio.run(go()) == "closed"
+    assert run_coroutine(go()) == "closed"

@@ -1,0 +1,80 @@
+"""The stream budget follows the event loop's lag (app.server_limits.StreamBudget.observe_lag), and
+the watcher (app.loop_watch) measures the lag of a loop that is held up."""
+from __future__ import annotations
+
+import asyncio
+import time
+
+import pytest
+
+from app import loop_watch
+from event_loops import run_coroutine
+from app.server_limits import ADJUST_PERIOD_S, LAG_HIGH_S, LAG_LOW_S, MIN_SESSION_HZ, StreamBudget
+
+
+def _budget(sessions: int, total_hz: float = 160.0) -> StreamBudget:
+    b = StreamBudget(total_hz=total_hz)
+    for who in range(sessions):
+        b.join(who)
+    return b
+
+
+def _feed(b: StreamBudget, lag_s: float, seconds: float, t0: float = 0.0, step_s: float = 0.05) -> float:
+    t = t0
+    while t < t0 + seconds:
+        b.observe_lag(lag_s, t)
+        t += step_s
+    return t
+
+
+def test_a_lagging_loop_cuts_the_rate_to_one_update_per_session_and_second_at_least():
+    b = _budget(8)
+    assert b.rate_hz == 160.0 and b.min_interval_s() == pytest.approx(0.05)
+    t = _feed(b, 0.4, 1.0)  # a starved loop: 0.4 s late
+    assert b.lag_s > LAG_HIGH_S and 0.3 * 160.0 <= b.rate_hz < 160.0  # cut, step by step
+    t = _feed(b, 0.4, 20.0, t)
+    assert b.rate_hz == pytest.approx(8 * MIN_SESSION_HZ)  # the floor: 1 update/s for each session
+    assert b.min_interval_s() == pytest.approx(1.0 / MIN_SESSION_HZ)
+
+
+def test_the_rate_changes_at_most_every_adjust_period():
+    b = _budget(4)
+    rates, t = [], 0.0
+    while t < 3.0:
+        b.observe_lag(1.0, t)
+        rates.append((t, b.rate_hz))
+        t += 0.01
+    changes = [t for (t, r), (_, r0) in zip(rates[1:], rates) if r != r0]
+    assert len(changes) >= 4
+    assert all(b_ - a >= ADJUST_PERIOD_S - 1e-9 for a, b_ in zip(changes, changes[1:]))
+
+
+def test_a_responsive_loop_gets_the_full_rate_back_and_a_middling_one_keeps_its_rate():
+    b = _budget(8)
+    t = _feed(b, 0.4, 20.0)
+    low = b.rate_hz
+    t = _feed(b, (LAG_LOW_S + LAG_HIGH_S) / 2, 10.0, t)  # between the thresholds: no change
+    assert b.rate_hz == low
+    _feed(b, 0.001, 60.0, t)
+    assert b.lag_s < LAG_LOW_S and b.rate_hz == 160.0  # back to the configured budget, not above
+
+
+def test_one_late_wake_up_does_not_cut_the_rate():
+    b = _budget(8)
+    t = _feed(b, 0.001, 2.0)
+    b.observe_lag(0.3, t)  # one hiccup (a page build): smoothed, under the threshold
+    assert b.lag_s < LAG_HIGH_S and b.rate_hz == 160.0
+
+
+def test_the_watcher_measures_a_loop_held_up_by_a_blocking_callback():
+    b = _budget(2)
+    seen = []
+    b.observe_lag = lambda lag, now: seen.append(lag)
+
+    async def go():
+        task = asyncio.get_running_loop().create_task(loop_watch.watch(b, sample_s=0.02, samples=6))
+        await asyncio.sleep(0.05)
+        time.sleep(0.3)  # a callback that holds the loop
+        await task
+    run_coroutine(go())
+    assert len(seen) == 6 and max(seen) >= 0.2 and min(seen) < 0.1, seen
