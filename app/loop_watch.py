@@ -11,7 +11,7 @@ import asyncio
 import time
 
 SAMPLE_S = 0.05  #: the watcher's sleep between samples [s]
-WATCH_KEY = "amra-loop-watch"  #: in ``pn.state.cache``: the watcher's task (one per process)
+WATCH_KEY = "amra-loop-watch"  #: in ``pn.state.cache``: (the watcher's task, the budget it feeds): one per process and loop
 
 
 async def watch(budget, sample_s: float = SAMPLE_S, samples: int | None = None) -> None:
@@ -26,12 +26,16 @@ async def watch(budget, sample_s: float = SAMPLE_S, samples: int | None = None) 
 
 
 def start_once(doc, budget) -> None:
-    """Start :func:`watch` on ``doc``'s event loop unless this process already runs it."""
+    """Start :func:`watch` on ``doc``'s event loop unless it already runs there (one watcher per
+    process and loop: a test process may run several servers one after another)."""
     import panel as pn
-    if pn.state.cache.get(WATCH_KEY) is not None:
-        return
-    pn.state.cache[WATCH_KEY] = "starting"
 
     def start():
-        pn.state.cache[WATCH_KEY] = asyncio.get_running_loop().create_task(watch(budget))
+        loop = asyncio.get_running_loop()
+        task, fed = pn.state.cache.get(WATCH_KEY) or (None, None)
+        if task is not None and not task.done() and task.get_loop() is loop and fed is budget:
+            return
+        if task is not None and not task.done() and task.get_loop() is loop:
+            task.cancel()  # a new budget (the cache was reset): feed that one
+        pn.state.cache[WATCH_KEY] = (loop.create_task(watch(budget)), budget)
     doc.add_next_tick_callback(start)

@@ -78,3 +78,35 @@ def test_the_watcher_measures_a_loop_held_up_by_a_blocking_callback():
         await task
     run_coroutine(go())
     assert len(seen) == 6 and max(seen) >= 0.2 and min(seen) < 0.1, seen
+
+
+def test_start_once_runs_one_watcher_per_loop_and_budget():
+    import panel as pn
+
+    class Doc:  # the part of a Bokeh document start_once uses
+        def __init__(self):
+            self.callbacks = []
+
+        def add_next_tick_callback(self, cb):
+            self.callbacks.append(cb)
+
+    async def go():
+        doc, first, second = Doc(), _budget(1), _budget(1)
+        fed_first, fed_second = [], []
+        first.observe_lag = lambda lag, now: fed_first.append(lag)
+        second.observe_lag = lambda lag, now: fed_second.append(lag)
+        for budget in (first, first, second):
+            loop_watch.start_once(doc, budget)
+        doc.callbacks[0]()
+        task, fed = pn.state.cache[loop_watch.WATCH_KEY]
+        doc.callbacks[1]()  # the same loop and budget: the same watcher
+        assert pn.state.cache[loop_watch.WATCH_KEY] == (task, first) and not task.done()
+        doc.callbacks[2]()  # a new budget: a new watcher, the old one stopped
+        new_task, new_fed = pn.state.cache[loop_watch.WATCH_KEY]
+        await asyncio.sleep(0.12)
+        assert new_task is not task and new_fed is second and task.cancelled()
+        n_first = len(fed_first)
+        await asyncio.sleep(0.12)
+        assert len(fed_second) >= 2 and len(fed_first) == n_first  # only the new budget is fed
+        new_task.cancel()
+    run_coroutine(go())
