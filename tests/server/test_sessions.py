@@ -252,8 +252,8 @@ def test_map_through_a_dask_cluster_beside_the_server(amra_server, chromium_args
 
 def test_load_eight_sessions_no_errors(tmp_path):
     """scripts/load_test.py at N = 8: no errors, every slider move seen in its page (the figures
-    are printed; the target p95 <= 2 s is reported, not asserted: on this 2-core machine the eight
-    Chromiums share the server's cores and their pages are starved, see README "Scaling")."""
+    are printed; the p95 <= 2 s target is measured by the script and reported in README "Scaling",
+    not asserted: it is a benchmark figure of a machine whose two cores the eight Chromiums share)."""
     rc = subprocess.run([sys.executable, "scripts/load_test.py", "--sessions", "8", "--moves", "2",
                          "--json", str(tmp_path / "load-8.json")], cwd=REPO, timeout=1500).returncode
     import json
