@@ -3,13 +3,17 @@ the watcher (app.loop_watch) measures the lag of a loop that is held up."""
 from __future__ import annotations
 
 import asyncio
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
 from app import loop_watch
-from event_loops import run_coroutine
 from app.server_limits import ADJUST_PERIOD_S, LAG_HIGH_S, LAG_LOW_S, MIN_SESSION_HZ, StreamBudget
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
+from load_test import run_async  # noqa: E402 - asyncio.run in a thread of its own (a test's loop may run)
 
 
 def _budget(sessions: int, total_hz: float = 160.0) -> StreamBudget:
@@ -76,7 +80,7 @@ def test_the_watcher_measures_a_loop_held_up_by_a_blocking_callback():
         await asyncio.sleep(0.05)
         time.sleep(0.3)  # a callback that holds the loop
         await task
-    run_coroutine(go())
+    run_async(go())
     assert len(seen) == 6 and max(seen) >= 0.2 and min(seen) < 0.1, seen
 
 
@@ -109,4 +113,4 @@ def test_start_once_runs_one_watcher_per_loop_and_budget():
         await asyncio.sleep(0.12)
         assert len(fed_second) >= 2 and len(fed_first) == n_first  # only the new budget is fed
         new_task.cancel()
-    run_coroutine(go())
+    run_async(go())
