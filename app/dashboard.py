@@ -258,7 +258,8 @@ class Dashboard(pn.viewable.Viewer):
         # eight sessions streaming, the clock and the verdict card took 20 % of the loop (py-spy,
         # 2026-12-01), ahead of the streamed rows and the users' input. So a loaded server shows
         # the running clock and the "so far" verdict less often (final ones always at once).
-        load = self.budget.load_factor() if self.budget is not None else 1.0
+        slowdown = self.budget.slowdown() if self.budget is not None else 1.0  # the loop lags: fewer redraws
+        load = self.budget.load_factor() * slowdown if self.budget is not None else 1.0
         now = time.perf_counter()
         while True:
             try:
@@ -339,7 +340,7 @@ class Dashboard(pn.viewable.Viewer):
         if self.map is not None and now >= self._next_map_poll:
             self.map.poll()
             # every session polls its map, so a loaded server polls each less often
-            self._next_map_poll = now + MAP_POLL_S * self.map.load_factor()
+            self._next_map_poll = now + MAP_POLL_S * self.map.load_factor() * slowdown
         return n
 
     def _run_text(self, text: str) -> None:

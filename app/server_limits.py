@@ -156,6 +156,7 @@ LAG_HIGH_S = 0.15  #: smoothed event-loop lag above which the stream budget is c
 LAG_LOW_S = 0.05  #: smoothed event-loop lag below which the stream budget grows back [s]
 ADJUST_PERIOD_S = 0.5  #: the budget changes at most this often [s]
 MIN_SESSION_HZ = 1.0  #: the budget never gives a streaming session fewer updates than this per second
+MAX_SLOWDOWN = 4.0  #: the secondary updates and map polls stretch with the budget's cut, by this at most
 
 
 class StreamBudget:
@@ -223,6 +224,12 @@ class StreamBudget:
         """1 with one or two sessions streaming, n/2 with n: the factor by which each session
         stretches the periods of its secondary updates (running clock, "so far" verdict)."""
         return max(1.0, self.streaming / 2.0)
+
+    def slowdown(self) -> float:
+        """How far the lagging loop has cut the rate (``total_hz / rate_hz``, 1 to
+        :data:`MAX_SLOWDOWN`): the sessions stretch their secondary updates and map polls by it too,
+        since each of those also makes every page redraw."""
+        return min(MAX_SLOWDOWN, max(1.0, self.total_hz / self.rate_hz))
 
 
 STREAM_BUDGET_KEY = "amra-stream-budget"

@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from app import loop_watch
-from app.server_limits import ADJUST_PERIOD_S, LAG_HIGH_S, LAG_LOW_S, MIN_SESSION_HZ, StreamBudget
+from app.server_limits import ADJUST_PERIOD_S, LAG_HIGH_S, LAG_LOW_S, MAX_SLOWDOWN, MIN_SESSION_HZ, StreamBudget
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "scripts"))
 from load_test import run_async  # noqa: E402 - asyncio.run in a thread of its own (a test's loop may run)
@@ -114,3 +114,12 @@ def test_start_once_runs_one_watcher_per_loop_and_budget():
         assert len(fed_second) >= 2 and len(fed_first) == n_first  # only the new budget is fed
         new_task.cancel()
     run_async(go())
+
+
+def test_the_slowdown_follows_the_cut_and_is_capped():
+    b = _budget(8)
+    assert b.slowdown() == 1.0
+    t = _feed(b, 0.4, 20.0)  # at the floor: 160 -> 8 updates/s
+    assert b.rate_hz == pytest.approx(8.0) and b.slowdown() == MAX_SLOWDOWN
+    _feed(b, 0.001, 60.0, t)
+    assert b.slowdown() == 1.0

@@ -186,6 +186,33 @@ def test_a_loaded_server_shows_so_far_verdicts_less_often_and_the_final_one_at_o
     assert shown == [("stable", False), ("flutter", False), ("divergence", True)]
 
 
+def test_a_lagging_server_stretches_the_so_far_verdicts_by_its_slowdown(dash):
+    """When the event loop lags, the budget's cut (app.server_limits.StreamBudget.slowdown)
+    stretches the secondary updates too (the clock, the "so far" verdict; the map polls by the same
+    factor): here eight sessions (load factor 4) and a cut of 4."""
+    from app.dashboard import VERDICT_PERIOD_S
+    dash.budget = StreamBudget(total_hz=160.0)
+    for who in range(8):
+        dash.budget.join(who)
+    dash.budget.rate_hz = 40.0  # as after the loop lagged
+    assert dash.budget.slowdown() == pytest.approx(4.0)
+    shown = []
+    dash.verdict.show = lambda v, final, *a: shown.append(v.verdict)
+    run = dash.current_run
+
+    def so_far(verdict):
+        dash.outbox.put(("verdict", {"run_id": run, "verdict": _Verdict(verdict), "final": False,
+                                     "status": "running", "start_note": ""}))
+        dash.pump()
+    so_far("stable")
+    dash._verdict_at -= 4 * VERDICT_PERIOD_S + 0.01  # enough without the cut, not with it
+    so_far("flutter")
+    assert shown == ["stable"]
+    dash._verdict_at -= 12 * VERDICT_PERIOD_S  # 16 periods in all: load factor 4 x slowdown 4
+    so_far("divergence")
+    assert shown == ["stable", "divergence"]
+
+
 def test_the_plot_ranges_stay_in_the_browser_and_the_drawing_count_comes_back():
     """The ranges follow the data in the browser; synced back they cost the server a message per
     drawing and range. The ack source must sync: it is the flow control."""
