@@ -200,8 +200,10 @@ class StreamBudget:
             return len(self._streaming)
 
     def min_interval_s(self) -> float:
-        """Shortest wall-clock interval between one session's updates now [s]."""
-        return self.streaming / self.rate_hz
+        """Shortest wall-clock interval between one session's updates now [s] (at most
+        ``1 / MIN_SESSION_HZ``, also when more sessions joined since the last cut)."""
+        n = self.streaming
+        return n / max(self.rate_hz, min(self.total_hz, MIN_SESSION_HZ * n))
 
     def observe_lag(self, lag_s: float, now_s: float) -> None:
         """One sample of the event loop's lag [s] (how late a timed wake-up ran), at ``now_s``

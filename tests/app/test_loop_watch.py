@@ -123,3 +123,12 @@ def test_the_slowdown_follows_the_cut_and_is_capped():
     assert b.rate_hz == pytest.approx(8.0) and b.slowdown() == MAX_SLOWDOWN
     _feed(b, 0.001, 60.0, t)
     assert b.slowdown() == 1.0
+
+
+def test_sessions_that_join_after_a_cut_still_get_one_update_a_second():
+    b = _budget(4)
+    _feed(b, 0.4, 20.0)
+    assert b.rate_hz == pytest.approx(4.0)
+    for who in range(4, 16):  # twelve more sessions start streaming; the lag stays in the middle band
+        b.join(who)
+    assert b.min_interval_s() == pytest.approx(1.0 / MIN_SESSION_HZ)
