@@ -33,9 +33,10 @@ def start_once(doc, budget) -> None:
     def start():
         loop = asyncio.get_running_loop()
         task, fed = pn.state.cache.get(WATCH_KEY) or (None, None)
-        if task is not None and not task.done() and task.get_loop() is loop and fed is budget:
+        running_here = task is not None and not task.done() and task.get_loop() is loop
+        if running_here and fed is budget:
             return
-        if task is not None and not task.done() and task.get_loop() is loop:
+        if running_here:
             task.cancel()  # a new budget (the cache was reset): feed that one
         pn.state.cache[WATCH_KEY] = (loop.create_task(watch(budget)), budget)
     doc.add_next_tick_callback(start)

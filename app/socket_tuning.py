@@ -64,31 +64,33 @@ def frame_bytes(payload: bytes, binary: bool) -> list:
 
 
 def _plain(protocol) -> bool:
-    """A connection whose frames Tornado writes as :func:`frame_bytes` makes them."""
-    return (type(protocol) is WebSocketProtocol13 and protocol.mask_outgoing is False
-            and protocol._compressor is None and protocol.stream is not None)
+    """A connection whose frames Tornado writes as :func:`frame_bytes` makes them, with the
+    attributes :func:`_write_at_once` uses (a Tornado that lacks one takes the queued path)."""
+    return (type(protocol) is WebSocketProtocol13 and getattr(protocol, "mask_outgoing", True) is False
+            and getattr(protocol, "_compressor", True) is None and getattr(protocol, "stream", None) is not None
+            and all(isinstance(getattr(protocol, a, None), int) for a in ("_message_bytes_out", "_wire_bytes_out")))
 
 
 def _looks_as_expected() -> bool:
     from bokeh.protocol import Protocol
     probe = Protocol().create("OK", "probe")
-    tornado_ok = all(hasattr(WebSocketProtocol13, a) for a in ("_write_frame", "is_closing", "write_message"))
     return (inspect.iscoroutinefunction(Message.send) and isinstance(getattr(probe, "_buffers", None), list)
             and isinstance(probe.header_json, str) and isinstance(getattr(Buffer, "ref", None), property)
-            and callable(getattr(Buffer, "to_bytes", None)) and tornado_ok)
+            and callable(getattr(Buffer, "to_bytes", None)) and callable(getattr(WebSocketProtocol13, "is_closing", None)))
 
 
 async def _write_at_once(conn, message: Message) -> int:
     protocol = conn.ws_connection
     if protocol is None or protocol.is_closing():
         raise WebSocketClosedError()
-    parts, sent = [], 0
+    parts, sent, payload_bytes = [], 0, 0
     for data, binary in frames(message):
         payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
         parts += frame_bytes(payload, binary)
         sent += len(data)
+        payload_bytes += len(payload)
     wire = b"".join(parts)
-    protocol._message_bytes_out += len(wire)  # Tornado's counters, as its own writes keep them
+    protocol._message_bytes_out += payload_bytes  # Tornado's counters, as its own writes keep them
     protocol._wire_bytes_out += len(wire)
     try:
         await protocol.stream.write(wire)

@@ -46,4 +46,3 @@ def wait_until(predicate, timeout_s=30.0, every_s=0.02, what="condition"):
 def wait():
     """``wait(predicate, timeout_s, what=...)``: poll until true, else fail."""
     return wait_until
-
