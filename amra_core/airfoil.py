@@ -21,7 +21,8 @@ from typing import NamedTuple
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
-from amra_core.jit import kernel
+# the jitted lookup and its Mach-correction constants live in amra_core.airfoil_kernel
+from .airfoil_kernel import MACH_CLIP, PG_FULL_DEG, PG_NONE_DEG, _coefficients_many, airfoil_coefficients  # noqa: F401
 
 #: Directory of the shipped airfoil tables.
 AIRFOIL_DIR = Path(__file__).resolve().parents[1] / "assets" / "airfoils"
@@ -36,9 +37,6 @@ AIRFOIL_FILES = {
 #: half-range [deg] (see :func:`symmetrised` and assets/airfoils/README.md).
 SYMMETRISE_DEG = {"naca0012_critzos": 15.0}
 
-MACH_CLIP = 0.7  #: Mach number at which the Prandtl-Glauert factor is capped [-].
-PG_FULL_DEG = 10.0  #: |alpha| up to which the full Prandtl-Glauert factor applies [deg].
-PG_NONE_DEG = 20.0  #: |alpha| from which no Prandtl-Glauert factor applies [deg].
 
 
 @dataclass(frozen=True)
@@ -218,68 +216,6 @@ def compile_airfoil(table: AirfoilTable, step_deg: float = 0.25) -> AirfoilArray
     return AirfoilArrays(-math.pi, math.radians(step_deg), *grids)
 
 
-@kernel
-def airfoil_coefficients(alpha_rad, mach, alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid):
-    """Section Cl, Cd, Cm at an angle of attack and Mach number (jitted).
-
-    Alpha is wrapped into [-pi, pi) and the uniform grid of :func:`compile_airfoil`
-    is interpolated linearly (index computed directly, no search).
-
-    Mach correction (the only one): Prandtl-Glauert factor ``1/sqrt(1 - M^2)``
-    on Cl in the attached-flow range only, with M clipped to [0, 0.7] inside
-    the factor: full factor for |alpha| <= 10 deg, fading linearly to none at
-    |alpha| = 20 deg, none beyond. The reverse-flow attached range about
-    +/-180 deg is NOT corrected. Cd and Cm get no Mach correction: NACA 0012
-    drag divergence is near M 0.75, above the tip Mach (~0.5) of the rotors in
-    scope, and the tables give no compressible Cm data.
-
-    Parameters
-    ----------
-    alpha_rad : float
-        Angle of attack [rad], any value (wrapped).
-    mach : float
-        Local Mach number [-].
-    alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid
-        The fields of :class:`AirfoilArrays` ([rad], [rad], [-], [-], [-]).
-
-    Returns
-    -------
-    cl, cd, cm : float
-        Lift, drag and quarter-chord moment coefficients [-].
-    """
-    two_pi = 2.0 * math.pi
-    a = alpha_rad - two_pi * math.floor((alpha_rad + math.pi) / two_pi)
-    x = (a - alpha0_rad) / dalpha_rad
-    i = int(math.floor(x))
-    n = cl_grid.shape[0]
-    if i < 0:
-        i = 0
-    elif i > n - 2:
-        i = n - 2
-    t = x - i
-    cl = cl_grid[i] + t * (cl_grid[i + 1] - cl_grid[i])
-    cd = cd_grid[i] + t * (cd_grid[i + 1] - cd_grid[i])
-    cm = cm_grid[i] + t * (cm_grid[i + 1] - cm_grid[i])
-    m = min(max(mach, 0.0), MACH_CLIP)
-    if m > 0.0:
-        abs_deg = abs(a) * (180.0 / math.pi)
-        if abs_deg < PG_NONE_DEG:
-            f = 1.0 / math.sqrt(1.0 - m * m)
-            if abs_deg <= PG_FULL_DEG:
-                cl *= f
-            else:
-                cl *= 1.0 + (PG_NONE_DEG - abs_deg) / (PG_NONE_DEG - PG_FULL_DEG) * (f - 1.0)
-    return cl, cd, cm
-
-
-@kernel
-def _coefficients_many(alpha_rad, mach, alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid):
-    n = alpha_rad.shape[0]
-    out = np.empty((3, n))
-    for k in range(n):
-        out[0, k], out[1, k], out[2, k] = airfoil_coefficients(
-            alpha_rad[k], mach[k], alpha0_rad, dalpha_rad, cl_grid, cd_grid, cm_grid)
-    return out
 
 
 def coefficients(table_arrays: AirfoilArrays, alpha_rad, mach=0.0):

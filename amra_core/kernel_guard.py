@@ -29,7 +29,7 @@ from collections import OrderedDict
 import numpy as np
 
 from . import kernels
-from .model import N_LOADS, N_P, N_S_COLS, N_Y_FIXED, P_INFLOW3, P_NS, P_NST, ModelArrays
+from .layout import N_LOADS, N_P, N_S_COLS, N_Y_FIXED, P_INFLOW3, P_NS, P_NST, ModelArrays
 
 
 class KernelShapeError(ValueError):

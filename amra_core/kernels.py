@@ -15,9 +15,9 @@ import math
 
 import numpy as np
 
-from .airfoil import airfoil_coefficients
+from .airfoil_kernel import airfoil_coefficients
 from .jit import inline_kernel, kernel
-from .model import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
+from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
                     P_VH, S_A, S_C, S_R,

@@ -23,61 +23,13 @@ from .rotor import Rotor
 from .shapes import make_mesh
 from .structure import assemble, torsion_stiffness
 
-# --- scalar parameter slots (indices into ModelArrays.p) -------------------------------------
-P_RHO, P_A_SOUND, P_G, P_MASS, P_R, P_R0, P_VH, P_ALPHA_S = range(8)
-P_HOLD_OMEGA, P_HOLD_VD, P_AERO, P_IR, P_ILAG, P_SLAG, P_KLAG, P_K2LAG = range(8, 16)
-P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG, P_INFLOW3 = range(16, 22)
-P_VACUUM = 22  #: 1: no aerodynamic loads, inflow and descent frozen (conservation tests only)
-P_FLAG = 23  #: static lag moment per Omega^2 [kg m] (RotorStructure.f_lag)
-N_P = 24
-
-# --- station table columns --------------------------------------------------------------------
-S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
-N_S_COLS = 7
-
-# --- fixed state slots --------------------------------------------------------------------------
-Y_PSI, Y_OMEGA, Y_VD, Y_V0, Y_ZETA0, Y_ZETA1, Y_ZETAD0, Y_ZETAD1 = range(8)
-N_Y_FIXED = 8
-
-# --- loads written by the right-hand side -----------------------------------------------------
-L_THRUST, L_TORQUE, L_HFORCE, L_FVERT, L_FHORIZ, L_VM = range(6)
-N_LOADS = 6
-
-#: R.T. Jones approximation of Wagner's function (physics-reference §4.4)
-WAGNER_A = (0.165, 0.335)
-WAGNER_B = (0.0455, 0.3)
-
-
-class ModelArrays(NamedTuple):
-    p: np.ndarray  #: scalar parameters, see P_* slots
-    minv: np.ndarray  #: inverse of structural + apparent mass (n_s x n_s)
-    k0: np.ndarray  #: stiffness independent of rotor speed
-    k2: np.ndarray  #: stiffness per Omega^2
-    c: np.ndarray  #: structural damping (n_s x n_s), see :func:`structural_damping`
-    st: np.ndarray  #: (n_st, N_S_COLS) station table
-    shw: np.ndarray  #: (2 blades, n_st, n) flap displacement per coordinate (teeter included)
-    shd: np.ndarray  #: (2, n_st, n) flap slope d w/d r per coordinate
-    sht: np.ndarray  #: (2, n_st, n) elastic twist per coordinate
-    tip: np.ndarray  #: (2 blades, 2 [flap, twist], n) tip displacement and twist per coordinate
-    teeter: np.ndarray  #: (n,) teeter angle per coordinate
-    lag_inv: np.ndarray  #: inverse of the [Omega, zeta0, zeta1] inertia matrix at x = 0 (3 x 3; the
-    #: kernel eliminates the state-dependent inertia itself, this stays for linear analyses)
-    af_alpha0: float
-    af_dalpha: float
-    af_cl: np.ndarray
-    af_cd: np.ndarray
-    af_cm: np.ndarray
-    sf: np.ndarray  #: (n,) static pitch load per Omega^2 [kg m] (``f`` of :mod:`amra_core.structure`)
-    gy0: np.ndarray  #: (n,) gyroscopic coupling with the rotor speed at x = 0 (``g0``)
-    gyh: np.ndarray  #: (n, n) gyroscopic coupling per coordinate (``H``, symmetric)
-    ugy0: np.ndarray  #: (n,) minv @ gy0
-    ugyh: np.ndarray  #: (n, n) minv @ gyh
-    ls2: np.ndarray  #: (2, n, n) lag coupling per blade, S_b = S_lag - 1/2 x^T ls2[b] x
-    li2: np.ndarray  #: (2, n, n) lag inertia per blade, I_b = I_lag - x^T li2[b] x
-    gl0: np.ndarray  #: (2, n) lag-pivot gyroscopic coupling per blade at x = 0 (``gl_b = gl0[b] + glh[b] x``)
-    glh: np.ndarray  #: (2, n, n) blade b's part of ``gyh`` (``glh[0] + glh[1] = gyh``)
-    ugl0: np.ndarray  #: (2, n) minv @ gl0[b]
-    uglh: np.ndarray  #: (2, n, n) minv @ glh[b]
+# the array layout lives in amra_core.layout (below the kernels); re-exported here for callers
+from .layout import (  # noqa: F401
+    L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, ModelArrays, N_LOADS, N_P, N_S_COLS, N_Y_FIXED,
+    P_AERO, P_ALPHA_S, P_A_SOUND, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_INFLOW3, P_IR,
+    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM, P_VH, S_A,
+    S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0, Y_ZETA1,
+    Y_ZETAD0, Y_ZETAD1)
 
 
 @dataclass(frozen=True)
