@@ -36,8 +36,9 @@ from .model import CompiledModel, compile_model
 from .periodic_trim import PeriodicContinuation
 from .rotor import Rotor
 from .stability import UNSTABLE_REAL_PART, Mode, analyse
-from .trim import (TrimResult, _faster_branch, _plausible, _solve_at, continue_to, on_branch, trim, trim_axial,
-                   windmill_brake_state)
+from .continuation import _faster_branch, continue_to, on_branch
+from .equilibrium import TrimResult, _plausible, _solve_at, trim_axial, windmill_brake_state
+from .trim import trim
 
 KINDS = ("stable", "flutter", "fold", "windmill-brake", "failed")
 #: largest continuation step (GJ ratio) along a column

@@ -1,4 +1,4 @@
-"""Trim: steady autorotation for the flight condition.
+"""Equilibria: steady autorotation solved at one parameter set (the point solvers of the trim).
 
 * Axial flight (time-invariant): solve ``f(y) = 0`` of the full nonlinear model for rotor speed,
   descent rate, inflow, lag and the static blade deflections (thrust = weight, torque = 0).
@@ -9,8 +9,8 @@
 * ``omega_hold_rad_s`` (paper Table 1): rotor speed held at the given value; axial: descent rate
   for thrust = weight; forward: level flight (descent 0) with the shaft tilt for lift = weight.
 
-When no steady autorotation exists, :class:`TrimResult` says ``no-autorotation``, why, and the
-last converged point of a continuation in GJ from a stiffer blade (where the trim branch ended).
+Following a branch of these equilibria in GJ is :mod:`amra_core.continuation`; the public
+:func:`amra_core.trim.trim` does that from a stiff blade down to the requested one.
 """
 from __future__ import annotations
 
@@ -22,8 +22,8 @@ import numpy as np
 from scipy.optimize import root
 
 from . import kernel_guard, kernels
-from .model import (L_FHORIZ, L_FVERT, L_THRUST, L_TORQUE, N_Y_FIXED, CompiledModel, Y_OMEGA,
-                    Y_PSI, Y_V0, Y_VD, compile_model, stable_time_step, transfer_state)
+from .model import (L_THRUST, L_TORQUE, CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step,
+                    transfer_state)
 
 MU_RANGE = (0.0, 0.5)
 
@@ -257,7 +257,6 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
     done, rows, status = kernel_guard.advance(y, 0.0, dt_rev, steps_rev, 1, model.arrays, hist, states, -1.0)
     if status != 0:
         raise FloatingPointError("non-finite state while converging the periodic solution")
-    from .model import L_FVERT as _  # noqa: F401  (layout documented in model)
     avg = hist[:rows].mean(axis=0)
     return y, avg, hist[:rows]
 
@@ -447,76 +446,6 @@ def trim_forward_continued(model: CompiledModel) -> TrimResult:
     return out
 
 
-def _faster_branch(model: CompiledModel, hold, prev: TrimResult) -> Optional[TrimResult]:
-    """A normal-branch trim of ``model`` faster than the fold point ``prev`` (axial flight), or None."""
-    if not model.flight.is_axial or hold is not None:
-        return None
-    y = transfer_state(prev.state, prev.model, model)
-    for factor in (1.1, 1.25, 1.4):
-        g = y.copy(); g[Y_OMEGA] *= factor
-        res = _trim_axial_from(model, g, None)
-        if _plausible(res, None) and res.branch == "normal" and res.omega_rad_s > prev.omega_rad_s * 1.02:
-            return res
-    return None
-
-
-# --------------------------------------------------------------------------- branch continuation
-#: largest change, beyond the secant prediction, that a continuation step may show: rotor speed
-#: [fraction], descent rate and inflow [fraction of v_h], tip twist [rad]
-STEP_OMEGA_REL = 0.05
-STEP_SPEED_VH = 0.15
-STEP_TWIST_RAD = 0.02
-
-
-def _trim_scalars(res: TrimResult) -> np.ndarray:
-    return np.array([res.omega_rad_s, res.descent_rate_m_s, res.inflow_m_s, res.tip_twist_rad])
-
-
-def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: CompiledModel) -> np.ndarray:
-    """Secant predictor of the state on ``target``: ``prev + s (prev - prev2)`` (``s``: the new step
-    over the last one, in log GJ), both mapped onto ``target``'s layout; ``prev`` alone without ``prev2``."""
-    y1 = transfer_state(prev.state, prev.model, target)
-    if prev2 is None or s == 0.0:
-        return y1
-    y0 = transfer_state(prev2.state, prev2.model, target)
-    y = y1 + s * (y1 - y0)
-    y[Y_PSI] = y1[Y_PSI]
-    return y
-
-
-def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
-    """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
-    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
-    the secant prediction. A False here means: halve the step (or a fold). The branch may move
-    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
-    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
-    if not _plausible(res, None):
-        return False
-    vh = _hover_induced(res.model)
-    x1 = _trim_scalars(prev)
-    pred = x1 if prev2 is None else x1 + s * (x1 - _trim_scalars(prev2))
-    d = np.abs(_trim_scalars(res) - pred)
-    return bool(d[0] <= STEP_OMEGA_REL * prev.omega_rad_s and d[1] <= STEP_SPEED_VH * vh
-                and d[2] <= STEP_SPEED_VH * vh and d[3] <= STEP_TWIST_RAD)
-
-
-def continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[TrimResult] = None,
-                s: float = 1.0) -> TrimResult:
-    """One continuation step: the trim of ``model`` from the predictor through ``prev``/``prev2``
-    (never a cold start). The caller checks :func:`on_branch`."""
-    try:
-        if model.flight.is_axial:
-            res = _trim_axial_from(model, predict(prev, prev2, s, model), hold)
-            if not res.ok and prev2 is not None:
-                res = _trim_axial_from(model, predict(prev, None, 0.0, model), hold)
-            if res.ok and hold is not None:
-                res.model = model.with_controls(hold_omega=True)
-            return res
-        return _solve_at(model, hold, prev)
-    except FloatingPointError as exc:
-        return TrimResult("no-autorotation", reason=str(exc), model=model)
-
-
 def gj_mean_of(model: CompiledModel) -> float:
     return float(np.mean(model.rotor.stations.gj_nm2))
 
@@ -531,14 +460,6 @@ def _plausible(res: TrimResult, prev: Optional[TrimResult]) -> bool:
     if prev is not None and abs(res.omega_rad_s - prev.omega_rad_s) > 0.25 * prev.omega_rad_s:
         return False
     return True
-
-
-def _with_gj_scale(model: CompiledModel, factor: float) -> CompiledModel:
-    from dataclasses import replace
-    rotor = model.rotor
-    gj = tuple(np.asarray(rotor.stations.gj_nm2) * factor)
-    r_f = replace(rotor, stations=replace(rotor.stations, gj_nm2=gj))
-    return compile_model(r_f, model.flight, model.settings)
 
 
 def _teeter_amplitude(last: np.ndarray) -> float:
@@ -568,90 +489,6 @@ def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y
                   f"{avg[H['vertical_force_n']]:.0f} N ({100 * avg[H['vertical_force_n']] / weight:.0f} % of the weight "
                   f"{weight:.0f} N), at a shaft tilt of {tilt_deg:g} deg; reported there")
     return res
-
-
-def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int = 8,
-         stiff_factor: float = 30.0, rel_tol: float = 0.02) -> TrimResult:
-    """Trim for the model's flight condition, following the trim branch by continuation in GJ
-    from a ``stiff_factor`` times stiffer blade down to the model's GJ (so the solution is the
-    physical branch, not a spurious root). Steps start at ``n_steps`` per the whole range in log GJ;
-    a step whose result leaves the branch (:func:`on_branch`: a jump in rotor speed, descent rate,
-    inflow or twist, or another branch class) is halved, never restarted from scratch. If the step
-    falls below ``rel_tol`` the branch has ended (a fold: the torque balance has no solution): the
-    result is ``no-autorotation`` with ``branch_end`` (GJ scale, mean GJ, rotor speed, descent rate
-    and tip twist of the last trimmed point, and a windmill-brake equilibrium at the requested GJ
-    if one exists) and that point's state and model in ``state``/``model``, from which a simulation
-    can start (model-notes §7)."""
-    hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
-    if hold is not None and not model.flight.is_axial:
-        return _solve_at(model, hold, None)  # rotor speed held (Table 1): no autorotation branch to follow
-    m_stiff = _with_gj_scale(model, stiff_factor)
-    try:
-        first = _solve_at(m_stiff, hold, None)
-    except FloatingPointError as exc:
-        first = TrimResult("no-autorotation", reason=str(exc), model=m_stiff)
-    if first.status == "thrust-limited":
-        return _solve_at(model, hold, None)
-    if not _plausible(first, None) or first.branch != "normal":
-        first.status = "no-autorotation"
-        first.reason = first.reason or f"no steady autorotation even for a {stiff_factor:g}x stiffer blade"
-        return first
-    ln_f, h_max = math.log(stiff_factor), math.log(stiff_factor) / max(n_steps - 1, 1)
-    h_min = math.log1p(rel_tol)
-    prev, prev2, h_prev = first, None, h_max
-    ln_cur, h = ln_f, h_max
-    while ln_cur > 0.0:
-        h = min(h, ln_cur)
-        ln_new = ln_cur - h
-        m_f = model if ln_new <= 0.0 else _with_gj_scale(model, math.exp(ln_new))
-        res = continue_to(m_f, hold, prev, prev2, h / h_prev)
-        if res.status == "thrust-limited":
-            return res if ln_new <= 0.0 else _solve_at(model, hold, None)
-        if on_branch(res, prev, prev2, h / h_prev):
-            prev2, prev, h_prev, ln_cur = prev, res, h, ln_new
-            h = min(h * 1.5, h_max)
-            continue
-        if h > h_min * (1 + 1e-9) and ln_cur > 0.0:
-            h = max(h / 2, h_min)
-            continue
-        return _branch_end(model, hold, first, prev, math.exp(ln_cur))
-    return prev
-
-
-def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult, lo: float) -> TrimResult:
-    """The result for a trim branch that ends (folds) at GJ scale ``lo`` above the model's GJ."""
-    gj_mean = gj_mean_of(model)
-    out = TrimResult("no-autorotation", model=prev.model, state=prev.state)
-    # which way the rotor speed was heading along the branch tells the two folds apart
-    runaway = "overspeed" if prev.omega_rad_s > first.omega_rad_s else "collapse"
-    if runaway == "overspeed":
-        # the branch may fold back onto a faster one (an S-curve): a trim there is the
-        # state the rotor jumps to; only without one does it run away
-        jump = _faster_branch(model, hold, prev)
-        if jump is not None:
-            jump.reason = (f"the trim branch through the stiff blade folds at mean GJ "
-                           f"{gj_mean * lo:.0f} N m^2/rad; this trim is on the faster branch")
-            return jump
-    if runaway == "collapse":
-        out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
-                      "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
-    else:
-        out.reason = ("no steady autorotation: following the trim branch down in GJ, the elastic nose-down "
-                      "twist lowers the blade pitch as the rotor speeds up, until no rotor speed balances "
-                      "the torque (the rotor runs away upwards)")
-    out.branch_end = {"gj_scale": float(lo), "gj_mean_nm2": gj_mean * float(lo),
-                      "omega_rad_s": float(prev.omega_rad_s),
-                      "descent_rate_m_s": float(prev.descent_rate_m_s),
-                      "disk_tilt_rad": float(prev.disk_tilt_rad),
-                      "tip_twist_rad": float(prev.tip_twist_rad),
-                      "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway}
-    wb = windmill_brake_state(model, hold)
-    if wb is not None:
-        out.branch_end["windmill_brake_descent_rate_m_s"] = float(wb.descent_rate_m_s)
-        out.reason += (f"; an equilibrium exists on the windmill-brake side (descent rate {wb.descent_rate_m_s:.1f} m/s, "
-                       f"{wb.descent_ratio:.1f} v_h), which is not autorotation")
-    out.start = prev
-    return out
 
 
 def windmill_brake_state(model: CompiledModel, hold=None) -> Optional[TrimResult]:

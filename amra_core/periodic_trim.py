@@ -17,7 +17,7 @@ import numpy as np
 
 from . import kernels
 from .model import CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step, transfer_state
-from .trim import TrimResult, _march_revs, _teeter_amplitude, omega_guess
+from .equilibrium import TrimResult, _march_revs, _teeter_amplitude, omega_guess
 
 _H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
 #: residual tolerance (as trim_forward: max of the scaled residuals)

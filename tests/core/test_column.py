@@ -162,7 +162,7 @@ def test_a_narrow_unstable_window_is_found_and_bracketed(paper, monkeypatch):
 
 # ----------------------------------------------------------------------------- speed-ups keep the answers
 def test_jitted_newton_matches_scipy_hybr(paper, monkeypatch):
-    import amra_core.trim as T
+    import amra_core.equilibrium as T
     m = _model(paper, 0.40, 800.0)
     fast = trim_axial(m)
     monkeypatch.setattr(T, "_newton_axial", lambda *a: None)  # force the scipy path

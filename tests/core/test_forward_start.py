@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from amra_core import trim as trim_mod
+from amra_core import equilibrium as trim_mod  # the point solvers of the trim
 from amra_core.flight import FlightCondition, SolverSettings
 from amra_core.model import Y_OMEGA, compile_model
 from amra_core.simulation import COL, Case, Simulation

@@ -218,7 +218,7 @@ def test_halving_time_step_forward_trim(mccutcheon, monkeypatch):
     """Forward flight: the periodic trim is found by marching, so its rotor speed depends on the
     step the trim uses (trim.stable_time_step; SolverSettings.dt_s is not used by the trim).
     Axial trim is algebraic (f(y) = 0) and has no time step."""
-    import amra_core.trim as trim_mod
+    import amra_core.equilibrium as trim_mod  # the forward trim's marching lives there
     auto = trim_mod.stable_time_step
     model = compile_model(mccutcheon, FORWARD, SolverSettings())
     full = trim(model)

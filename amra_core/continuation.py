@@ -1,0 +1,92 @@
+"""Continuation of the trim branch in GJ: a secant predictor, the test that a solution continues
+the branch, and one continuation step (issue 8 §2).
+
+Used by :func:`amra_core.trim.trim` (from a stiff blade down to the requested GJ) and by the map's
+column walk (:mod:`amra_core.column`). A step is never a cold start: a cold start lands easily on
+the windmill-brake root, a separate equilibrium with 2-4 times the descent rate (model-notes §7).
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+
+from .equilibrium import TrimResult, _hover_induced, _plausible, _solve_at, _trim_axial_from
+from .model import CompiledModel, Y_OMEGA, Y_PSI, compile_model, transfer_state
+
+
+#: largest change, beyond the secant prediction, that a continuation step may show: rotor speed
+#: [fraction], descent rate and inflow [fraction of v_h], tip twist [rad]
+STEP_OMEGA_REL = 0.05
+STEP_SPEED_VH = 0.15
+STEP_TWIST_RAD = 0.02
+
+
+def _trim_scalars(res: TrimResult) -> np.ndarray:
+    return np.array([res.omega_rad_s, res.descent_rate_m_s, res.inflow_m_s, res.tip_twist_rad])
+
+
+def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: CompiledModel) -> np.ndarray:
+    """Secant predictor of the state on ``target``: ``prev + s (prev - prev2)`` (``s``: the new step
+    over the last one, in log GJ), both mapped onto ``target``'s layout; ``prev`` alone without ``prev2``."""
+    y1 = transfer_state(prev.state, prev.model, target)
+    if prev2 is None or s == 0.0:
+        return y1
+    y0 = transfer_state(prev2.state, prev2.model, target)
+    y = y1 + s * (y1 - y0)
+    y[Y_PSI] = y1[Y_PSI]
+    return y
+
+
+def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
+    """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
+    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
+    the secant prediction. A False here means: halve the step (or a fold). The branch may move
+    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
+    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
+    if not _plausible(res, None):
+        return False
+    vh = _hover_induced(res.model)
+    x1 = _trim_scalars(prev)
+    pred = x1 if prev2 is None else x1 + s * (x1 - _trim_scalars(prev2))
+    d = np.abs(_trim_scalars(res) - pred)
+    return bool(d[0] <= STEP_OMEGA_REL * prev.omega_rad_s and d[1] <= STEP_SPEED_VH * vh
+                and d[2] <= STEP_SPEED_VH * vh and d[3] <= STEP_TWIST_RAD)
+
+
+def continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[TrimResult] = None,
+                s: float = 1.0) -> TrimResult:
+    """One continuation step: the trim of ``model`` from the predictor through ``prev``/``prev2``
+    (never a cold start). The caller checks :func:`on_branch`."""
+    try:
+        if model.flight.is_axial:
+            res = _trim_axial_from(model, predict(prev, prev2, s, model), hold)
+            if not res.ok and prev2 is not None:
+                res = _trim_axial_from(model, predict(prev, None, 0.0, model), hold)
+            if res.ok and hold is not None:
+                res.model = model.with_controls(hold_omega=True)
+            return res
+        return _solve_at(model, hold, prev)
+    except FloatingPointError as exc:
+        return TrimResult("no-autorotation", reason=str(exc), model=model)
+
+
+def _faster_branch(model: CompiledModel, hold, prev: TrimResult) -> Optional[TrimResult]:
+    """A normal-branch trim of ``model`` faster than the fold point ``prev`` (axial flight), or None."""
+    if not model.flight.is_axial or hold is not None:
+        return None
+    y = transfer_state(prev.state, prev.model, model)
+    for factor in (1.1, 1.25, 1.4):
+        g = y.copy(); g[Y_OMEGA] *= factor
+        res = _trim_axial_from(model, g, None)
+        if _plausible(res, None) and res.branch == "normal" and res.omega_rad_s > prev.omega_rad_s * 1.02:
+            return res
+    return None
+
+
+def _with_gj_scale(model: CompiledModel, factor: float) -> CompiledModel:
+    from dataclasses import replace
+    rotor = model.rotor
+    gj = tuple(np.asarray(rotor.stations.gj_nm2) * factor)
+    r_f = replace(rotor, stations=replace(rotor.stations, gj_nm2=gj))
+    return compile_model(r_f, model.flight, model.settings)
