@@ -53,9 +53,6 @@ class BladeMesh:
     def tip_m(self) -> float:
         return self.nodes_m[-1]
 
-    def flap_labels(self) -> list:
-        return ["flap"] * self.n_flap
-
     def shapes(self, r):
         """Shape matrices at radii ``r`` [m]: (Phi_w, Phi_w', Phi_w'', Phi_t, Phi_t'),
         each of shape (len(r), n_q); primes are d/dr."""

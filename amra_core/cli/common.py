@@ -75,15 +75,6 @@ def emit(obj, as_json):
             print(f"{k:28s} {v}")
 
 
-def jsonable(o):
-    import numpy as np
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    raise TypeError(type(o).__name__)
-
-
 def value_range(name, lo, hi, with_count):
     """Parser of ``A:B`` (or ``A:B:N`` with ``with_count``) with both ends in [lo, hi]."""
     form = "A:B:N" if with_count else "A:B"

@@ -1,0 +1,134 @@
+"""A finished (or partial) boundary map: cells, per-column summaries, transitions, JSON and CSV."""
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+
+from ..stability import CellResult
+from .spec import VERDICTS, MapSpec, solver_fingerprint
+from .tasks import cell_class
+
+@dataclass
+class BoundaryMap:
+    """A (possibly partial) map. ``cells`` sorted by CG then GJ; ``columns``: per CG column its
+    ``critical_gj`` [N m^2/rad], final ``bracket`` and ``status`` (``stable-throughout``,
+    ``bracketed``, ``unstable-at-gj-max``, ``unresolved`` (a failed cell at the boundary or the
+    bracket not yet at tolerance), ``incomplete`` (cancelled before its coarse cells were done));
+    ``boundaries``: every transition; ``cases``: cells in the map; ``cached_cases``: of them read
+    from the store; ``wall_time_s``: [s]."""
+
+    spec: MapSpec
+    cells: list
+    columns: list
+    boundaries: list
+    cases: int
+    cached_cases: int
+    wall_time_s: float
+    cancelled: bool = False
+    executor: str = ""
+    phases: dict = field(default_factory=dict)
+
+    @property
+    def critical_gj(self) -> list:
+        return [[c["cg"], c["critical_gj"]] for c in self.columns]
+
+    @property
+    def computed_cases(self) -> int:
+        return self.cases - self.cached_cases
+
+    @property
+    def complete(self) -> bool:
+        return not self.cancelled and all(c["status"] != "incomplete" for c in self.columns)
+
+    @property
+    def cells_per_s(self) -> float:
+        return self.computed_cases / self.wall_time_s if self.wall_time_s > 0 else float("nan")
+
+    def verdict_counts(self) -> dict:
+        out = {v: 0 for v in VERDICTS}
+        for c in self.cells:
+            out[c.verdict] = out.get(c.verdict, 0) + 1
+        return out
+
+    def to_dict(self) -> dict:
+        def fin(x):
+            return None if x is None or (isinstance(x, float) and not math.isfinite(x)) else x
+        return {
+            "spec": self.spec.to_dict(),
+            "solver": solver_fingerprint(),
+            "critical_gj": [[cg, fin(g)] for cg, g in self.critical_gj],
+            "critical_gj_definition": "upper end of the final bracket (lowest computed GJ stable up to gj_max); "
+                                      "null: see columns[].status",
+            "columns": [{**c, "critical_gj": fin(c["critical_gj"])} for c in self.columns],
+            "boundaries": self.boundaries,
+            "cells": [{k: fin(v) for k, v in c.to_dict().items()} for c in self.cells],
+            "verdict_counts": self.verdict_counts(),
+            "cases": self.cases,
+            "cached_cases": self.cached_cases,
+            "computed_cases": self.computed_cases,
+            "wall_time_s": self.wall_time_s,
+            "cells_per_s": fin(self.cells_per_s),
+            "cancelled": self.cancelled,
+            "complete": self.complete,
+            "executor": self.executor,
+        }
+
+    def to_csv(self, path) -> None:
+        """One row per cell: cg, gj_nm2, verdict, stable, boundary_kind, growth_rate_per_s [1/s],
+        frequency_hz [Hz], omega_trim_rad_s [rad/s], reason."""
+        cols = list(CellResult.__dataclass_fields__)
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(cols)
+            for c in self.cells:
+                w.writerow(["" if getattr(c, k) is None else getattr(c, k) for k in cols])
+
+
+def _summarise(spec: MapSpec, by_col: dict, info: dict) -> tuple[list, list]:
+    """Per column: critical GJ, bracket, status, kind, fold GJ, intervals; and every transition."""
+    columns, boundaries = [], []
+    tol = 1.0 + spec.gj_rel_tol * (1 + 1e-9)
+    for cg in spec.cg_values:
+        cells = sorted(by_col.get(cg, {}).values(), key=lambda c: c.gj_nm2)
+        col = info.get(cg)
+        if col is None or not cells:
+            columns.append({"cg": cg, "critical_gj": None, "bracket": None, "status": "incomplete", "kind": None,
+                            "fold_gj": None, "intervals": []})
+            continue
+        for lo, hi in zip(cells[:-1], cells[1:]):
+            a, b = cell_class(lo), cell_class(hi)
+            if a == b:
+                continue
+            if "failed" in (a, b):
+                kind = "unknown"
+            elif "stable" in (a, b):
+                kind = b if a == "stable" else a
+            elif "fold" in (a, b):
+                kind = "fold"
+            else:
+                kind = a
+            boundaries.append({"cg": cg, "kind": kind, "gj_lo": lo.gj_nm2, "gj_hi": hi.gj_nm2,
+                               "gj": math.sqrt(lo.gj_nm2 * hi.gj_nm2), "below": lo.verdict, "above": hi.verdict,
+                               "resolved": hi.gj_nm2 / lo.gj_nm2 <= tol and kind != "unknown"})
+        base = {"cg": cg, "fold_gj": col.get("fold_gj"), "intervals": col.get("intervals", [])}
+        if col.get("failed") or col.get("cancelled"):
+            columns.append({**base, "critical_gj": None, "bracket": None,
+                            "status": "incomplete" if col.get("cancelled") else "unresolved", "kind": None})
+            continue
+        if cell_class(cells[-1]) != "stable":
+            status = "unresolved" if cell_class(cells[-1]) == "failed" else "unstable-at-gj-max"
+            columns.append({**base, "critical_gj": math.inf, "bracket": None, "status": status, "kind": None})
+            continue
+        i = len(cells) - 1
+        while i > 0 and cell_class(cells[i - 1]) == "stable":
+            i -= 1
+        if i == 0:
+            columns.append({**base, "critical_gj": None, "bracket": None, "status": "stable-throughout", "kind": None})
+            continue
+        lo, hi = cells[i - 1], cells[i]
+        ok = hi.gj_nm2 / lo.gj_nm2 <= tol and cell_class(lo) != "failed"
+        columns.append({**base, "critical_gj": hi.gj_nm2, "bracket": [lo.gj_nm2, hi.gj_nm2],
+                        "status": "bracketed" if ok else "unresolved",
+                        "kind": cell_class(lo) if cell_class(lo) != "failed" else "unknown"})
+    return columns, boundaries

@@ -1,0 +1,133 @@
+"""The work of a map: one task per CG column (picklable, what a worker receives), the cells of a
+column walk, and the worker entry point :func:`compute_column` (never raises)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Optional
+
+import numpy as np
+
+from ..flight import FlightCondition, SolverSettings
+from ..rotor import Rotor
+from ..stability import CellResult
+
+def failed_cell(cg: float, gj: float, reason: str) -> CellResult:
+    return CellResult(cg, gj, "failed", False, "", None, None, None, reason)
+
+
+def cell_class(c: CellResult) -> str:
+    """``stable`` | ``flutter`` (trimmed, unstable) | ``fold`` (no trim) | ``windmill-brake`` | ``failed``."""
+    if c.verdict == "failed":
+        return "failed"
+    if c.verdict == "windmill-brake":
+        return "windmill-brake"
+    if c.stable:
+        return "stable"
+    return "fold" if c.boundary_kind == "fold" or c.verdict in ("no-autorotation", "overspeed") else "flutter"
+
+
+# ----------------------------------------------------------------------------- columns
+@dataclass(frozen=True)
+class ColumnTask:
+    """One CG column to walk (picklable: what a worker receives)."""
+
+    cg: float
+    rotor: Rotor  #: carries the map's EA
+    flight: FlightCondition
+    settings: SolverSettings
+    method: str
+    gj_min: float
+    gj_max: float
+    rel_tol: float
+    n_probe: int
+    max_step: float
+
+
+@dataclass
+class ColumnResult:
+    """What a worker returns for a column (light: no models or states). ``failed``: the walk raised."""
+
+    cg: float
+    cells: list
+    intervals: list
+    critical_gj: Optional[float]
+    fold_gj: Optional[float]
+    n_trims: int = 0
+    wall_time_s: float = 0.0
+    failed: bool = False
+    cancelled: bool = False
+
+
+def cells_of_walk(cg: float, points: list, top_omega: Optional[float] = None) -> list:
+    """The map cells of a column walk's points (GJ ascending)."""
+    from ..stability import cell_from_modes
+    pts = sorted(points, key=lambda p: p.gj_nm2)
+    if top_omega is None:
+        tops = [p for p in pts if p.branch == "normal"]
+        top_omega = tops[-1].trim.omega_rad_s if tops else None
+    cells = []
+    for i, p in enumerate(pts):
+        kind = p.kind
+        if kind in ("stable", "flutter"):
+            c = cell_from_modes(cg, p.gj_nm2, p.trim, p.modes)
+        elif kind == "windmill-brake":
+            c = CellResult(cg, p.gj_nm2, "windmill-brake", False, "windmill-brake", None, None,
+                           float(p.trim.omega_rad_s), p.reason, "windmill-brake", float(p.trim.descent_rate_m_s))
+        elif kind == "fold":
+            above = next((q for q in pts[i + 1:] if q.branch == "normal"), None)
+            rising = above is not None and top_omega is not None and above.trim.omega_rad_s > top_omega
+            c = CellResult(cg, p.gj_nm2, "overspeed" if rising else "no-autorotation", False, "fold", None, None,
+                           None, p.reason or "no trim on the normal branch", "none")
+        else:
+            c = failed_cell(cg, p.gj_nm2, f"numerical failure: {p.reason}")
+        cells.append(c)
+    return cells
+
+
+def _time_cells(task: ColumnTask, points: list, cells: list) -> list:
+    """``method='time'``: the walk's normal-branch points judged by time marching from their trim."""
+    from ..simulation import Case, Simulation
+    out = []
+    for p, c in zip(sorted(points, key=lambda p: p.gj_nm2), cells):
+        if p.branch != "normal":
+            out.append(c)
+            continue
+        rotor = task.rotor.with_overrides(gj_nm2=p.gj_nm2, x_cg=task.cg)
+        sim = Simulation(Case(rotor, task.flight, task.settings, t_end_s=8.0), trim_result=p.trim).run()
+        v = sim.verdict()
+        out.append(CellResult(task.cg, p.gj_nm2, v.verdict, v.verdict == "stable",
+                              "" if not v.unstable else "flutter", v.growth_rate_per_s, v.frequency_hz,
+                              p.trim.omega_rad_s, v.explanation, "normal", float(p.trim.descent_rate_m_s)))
+    return out
+
+
+def compute_column(task: ColumnTask, on_point=None, cancel=None) -> ColumnResult:
+    """Worker entry point: walk one column; an exception becomes a ``failed`` column (never raises)."""
+    from ..column import walk_column
+    try:
+        with np.errstate(all="ignore"):
+            w = walk_column(task.rotor, task.flight, task.settings, task.cg, task.gj_min, task.gj_max,
+                            rel_tol=task.rel_tol, on_point=on_point, cancel=cancel, max_step=task.max_step,
+                            n_probe=task.n_probe)
+            cells = cells_of_walk(task.cg, w.points)
+            if task.method == "time":
+                cells = _time_cells(task, w.points, cells)
+        intervals = w.intervals
+        crit = w.critical_gj_nm2
+        if task.method == "time":
+            intervals, crit = _summary_of_cells(cells, task)
+        return ColumnResult(task.cg, cells, intervals, crit, w.fold_gj_nm2, w.n_trims, w.wall_time_s,
+                            any(c.verdict == "failed" for c in cells), w.cancelled)
+    except Exception as exc:  # noqa: BLE001 - a failed column is a result, not a crash
+        return ColumnResult(task.cg, [failed_cell(task.cg, task.gj_max, f"{type(exc).__name__}: {exc}")], [], None,
+                            None, failed=True)
+
+
+def _summary_of_cells(cells: list, task: ColumnTask):
+    """(intervals, critical GJ) from cells (used when the cells' classes are not the walk's)."""
+    from ..column import summarise
+
+    class _P:  # the two attributes summarise reads
+        def __init__(self, c):
+            self.gj_nm2, self.kind = c.gj_nm2, cell_class(c)
+    return summarise([_P(c) for c in cells], task.gj_min, task.gj_max, task.rel_tol)
