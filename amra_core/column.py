@@ -35,20 +35,20 @@ from .flight import FlightCondition, SolverSettings
 from .model import CompiledModel, compile_model
 from .periodic_trim import PeriodicContinuation
 from .rotor import Rotor
-from .stability import UNSTABLE_REAL_PART, Mode, analyse
-from .continuation import _faster_branch, continue_to, on_branch
+from .stability import MIN_FLUTTER_HZ, UNSTABLE_REAL_PART, Mode, analyse
+from .continuation import _faster_branch, continue_to, mark_continued, on_branch
 from .equilibrium import TrimResult, _plausible, _solve_at, trim_axial, windmill_brake_state
 from .trim import trim
 
-KINDS = ("stable", "flutter", "fold", "windmill-brake", "failed")
+KINDS = ("stable", "flutter", "fold", "overspeed", "windmill-brake", "failed")
 #: largest continuation step (GJ ratio) along a column
 MAX_STEP = 1.15
 
 
 @dataclass(frozen=True)
 class BranchPoint:
-    """One point of a column walk at ``gj_nm2`` [N m^2/rad]: ``branch`` ``normal`` |
-    ``windmill-brake`` | ``none``; ``trim`` (None without equilibrium); ``modes``
+    """One point of a column walk at ``gj_nm2`` [N m^2/rad]: ``branch`` ``normal`` | ``overspeed`` |
+    ``windmill-brake`` | ``none`` (:attr:`~amra_core.equilibrium.TrimResult.branch`); ``trim`` (None without equilibrium); ``modes``
     (:class:`~amra_core.stability.Mode`, empty off the normal branch); ``max_real_part_per_s``
     [1/s] (nan without modes); ``stable``: normal branch and every mode decays."""
 
@@ -62,9 +62,9 @@ class BranchPoint:
 
     @property
     def kind(self) -> str:
-        """``stable`` | ``flutter`` | ``fold`` | ``windmill-brake`` | ``failed``."""
-        if self.branch == "windmill-brake":
-            return "windmill-brake"
+        """``stable`` | ``flutter`` | ``fold`` | ``overspeed`` | ``windmill-brake`` | ``failed``."""
+        if self.branch in ("windmill-brake", "overspeed"):
+            return self.branch
         if self.branch == "none":
             return "fold"
         if not math.isfinite(self.max_real_part_per_s):
@@ -81,7 +81,8 @@ class ColumnWalk:
     """Result of :func:`walk_column`. ``points`` sorted by GJ (ascending); ``intervals``: dicts
     ``{kind, gj_lo_nm2, gj_hi_nm2, resolved}`` covering the range, edges at the geometric mean of
     the two points bracketing a change (``resolved``: both edges bracketed to ``rel_tol``);
-    ``critical_gj_nm2``: the lowest point from which the column is stable up to ``gj_max`` (upper
+    each carries ``gj_lo_point_nm2``/``gj_hi_point_nm2`` (its lowest and highest computed point) and,
+    for ``flutter``, what is unstable (:func:`instability`); ``critical_gj_nm2``: the lowest point from which the column is stable up to ``gj_max`` (upper
     end of its bracket; None if stable throughout, inf if unstable at ``gj_max``); ``fold_gj_nm2``:
     the lowest GJ of the branch through ``gj_max`` when it folds inside the range (else None)."""
 
@@ -100,6 +101,16 @@ class ColumnWalk:
 
 class _Cancelled(Exception):
     pass
+
+
+#: real parts compared along the walk for the step control: the least damped few structural modes
+N_STEP_MODES = 4
+
+
+def _least_damped(p: BranchPoint) -> list:
+    """The ``N_STEP_MODES`` largest real parts [1/s] of ``p``'s modes other than the aerodynamic lag
+    states, sorted down (ranks, not tracked modes: a step-size heuristic only)."""
+    return sorted((m.real_part_per_s for m in p.modes if m.label != "aero lag"), reverse=True)[:N_STEP_MODES]
 
 
 class _Walker:
@@ -138,17 +149,21 @@ class _Walker:
         self._check_cancel()
         branch = tr.branch if tr is not None else "none"
         modes, sig, stable = [], float("nan"), False
-        if branch == "normal":
+        if branch in ("normal", "overspeed"):
             try:
                 with np.errstate(all="ignore"):
                     res = analyse(tr.model, tr)
                 modes = res.modes
                 sig = max(m.real_part_per_s for m in modes) if modes else float("nan")
-                stable = bool(res.stable) and math.isfinite(sig)
+                stable = bool(res.stable) and math.isfinite(sig) and branch == "normal"
                 if not math.isfinite(sig):
                     reason = reason or "numerical failure: non-finite exponents"
             except Exception as exc:  # noqa: BLE001 - a failed point is a result
                 reason = f"{type(exc).__name__}: {exc}"
+        if branch == "overspeed":
+            reason = reason or (f"the normal branch overspeeding: rotor speed {tr.omega_rad_s:.1f} rad/s (the branch "
+                                f"started at {tr.omega_branch_start_rad_s:.1f}), descent rate {tr.descent_rate_m_s:.1f} "
+                                f"m/s ({tr.descent_ratio:.2f} v_h), inflow {tr.inflow_m_s:.1f} m/s")
         elif branch == "windmill-brake":
             reason = reason or (f"equilibrium on the windmill-brake side: descent rate {tr.descent_rate_m_s:.1f} m/s "
                                 f"({tr.descent_ratio:.2f} v_h), not autorotation")
@@ -163,13 +178,13 @@ class _Walker:
         self._check_cancel()
         self.n_trims += 1
         if not self.axial:  # periodic trim continued from a's orbit (Broyden-updated Jacobian)
-            tr = self.periodic.step(self.model(gj), a.trim, None if b is None else b.trim, s)
+            tr = mark_continued(self.periodic.step(self.model(gj), a.trim, None if b is None else b.trim, s), a.trim)
             if on_branch(tr, a.trim, None if b is None else b.trim, s):
                 return tr
             if b is None:
                 return None
             self.n_trims += 1  # the secant may overshoot near a fold: one more try from a alone
-            tr = self.periodic.step(self.model(gj), a.trim)
+            tr = mark_continued(self.periodic.step(self.model(gj), a.trim), a.trim)
             return tr if on_branch(tr, a.trim, None, 0.0) else None
         tr = continue_to(self.model(gj), None, a.trim, None if b is None else b.trim, s)
         if on_branch(tr, a.trim, None if b is None else b.trim, s):
@@ -264,11 +279,14 @@ class _Walker:
                 self.bisect(hi_, lo_)
             h_next = min(1.5 * h, self.h_max)
             if sa is not None and sb is not None and sa == sb:
-                # the largest real part heading for zero: shorten the step so a window is not jumped
-                d_sig = p.max_real_part_per_s - prev.max_real_part_per_s
-                if d_sig * p.max_real_part_per_s < 0:
-                    dist = abs(p.max_real_part_per_s) / abs(d_sig) * h
-                    h_next = min(h_next, max(0.5 * dist, self.h_floor))
+                # a least-damped real part heading for zero: shorten the step so a window is not jumped
+                # (not only the largest: a torsion mode 4th in line can rise from -4 to +5 1/s within 7 %
+                # of GJ and back, rigid axial CG 0.36 GJ 434-482, which the largest alone stepped over)
+                for ra, rb in zip(_least_damped(prev), _least_damped(p)):
+                    d_sig = rb - ra
+                    if d_sig * rb < 0:
+                        dist = abs(rb) / abs(d_sig) * h
+                        h_next = min(h_next, max(0.5 * dist, self.h_floor))
             prev2, prev, h_prev, ln_cur = prev, p, h, ln_new
             h = h_next
         return None
@@ -353,11 +371,58 @@ def _intervals(points: list, gj_min: float, gj_max: float, rel_tol: float, compl
         out[-1]["gj_hi_nm2"] = gj_max if complete or points[-1].gj_nm2 == gj_max else points[-1].gj_nm2
         out[-1]["_hi_ok"] = True
     res = []
+    first = 0
     for iv in out:
         # windmill-brake / fold edges come from probes: bracketed to the probe grid only
-        res.append({"kind": iv["kind"], "gj_lo_nm2": iv["gj_lo_nm2"], "gj_hi_nm2": iv["gj_hi_nm2"],
-                    "resolved": bool(iv["_lo_ok"] and iv["_hi_ok"])})
+        d = {"kind": iv["kind"], "gj_lo_nm2": iv["gj_lo_nm2"], "gj_hi_nm2": iv["gj_hi_nm2"],
+             "resolved": bool(iv["_lo_ok"] and iv["_hi_ok"]),
+             "gj_lo_point_nm2": points[first].gj_nm2, "gj_hi_point_nm2": points[iv["_last"]].gj_nm2}
+        if iv["kind"] == "flutter":
+            d.update(instability(points[first:iv["_last"] + 1]))
+        first = iv["_last"] + 1
+        res.append(d)
     return res
+
+
+#: modes labelled by a variable of the trim equilibrium (not of the blade): the eigenvalue that passes
+#: through zero at a fold is one of them
+EQUILIBRIUM_MODES = ("rotor speed", "inflow", "descent")
+
+
+def _mode_record(m: Mode) -> dict:
+    return {"mode": m.label, "growth_rate_1_s": float(m.real_part_per_s), "damping_ratio": float(m.damping_ratio),
+            "frequency_hz": float(m.frequency_hz),
+            "participation": {k: round(float(v), 3) for k, v in m.participation.items()}}
+
+
+def instability(points: list) -> dict:
+    """What is unstable in a run of unstable points of one interval (issue 21 §1): at the point of
+    largest real part, that mode's ``peak_growth_rate_1_s`` [1/s], ``damping_ratio`` [-] (negative:
+    growing), ``frequency_hz`` [Hz], ``mode`` label and ``participation`` (rotor speed, teeter,
+    flap, torsion, lag, inflow, descent); ``oscillatory``: the unstable oscillating mode
+    (frequency >= ``MIN_FLUTTER_HZ``) of most negative damping ratio over the interval's points
+    (None if none); ``oscillatory_blade``: the same among the modes not labelled by an equilibrium
+    variable (:data:`EQUILIBRIUM_MODES`); ``monotonic_growth_rate_1_s``: the largest real part of an unstable mode that
+    does not oscillate (None if none); ``n_points``."""
+    pts = [p for p in points if getattr(p, "modes", None)]
+    out = {"peak_growth_rate_1_s": None, "damping_ratio": None, "frequency_hz": None, "mode": None,
+           "participation": {}, "oscillatory": None, "oscillatory_blade": None, "monotonic_growth_rate_1_s": None, "n_points": len(points)}
+    if not pts:
+        return out
+    peak = max(pts, key=lambda p: p.max_real_part_per_s).critical
+    rec = _mode_record(peak)
+    out.update({"peak_growth_rate_1_s": rec["growth_rate_1_s"], "damping_ratio": rec["damping_ratio"],
+                "frequency_hz": rec["frequency_hz"], "mode": rec["mode"], "participation": rec["participation"]})
+    unstable = [m for p in pts for m in p.modes if m.real_part_per_s >= UNSTABLE_REAL_PART and m.label != "aero lag"]
+    osc = [m for m in unstable if m.frequency_hz >= MIN_FLUTTER_HZ]
+    if osc:
+        out["oscillatory"] = _mode_record(min(osc, key=lambda m: m.damping_ratio))
+    blade = [m for m in osc if m.label not in EQUILIBRIUM_MODES]
+    out["oscillatory_blade"] = _mode_record(min(blade, key=lambda m: m.damping_ratio)) if blade else None
+    mono = [m.real_part_per_s for m in unstable if m.frequency_hz < MIN_FLUTTER_HZ]
+    if mono:
+        out["monotonic_growth_rate_1_s"] = float(max(mono))
+    return out
 
 
 def summarise(points: list, gj_min: float, gj_max: float, rel_tol: float, complete: bool = True):

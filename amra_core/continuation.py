@@ -7,6 +7,7 @@ the windmill-brake root, a separate equilibrium with 2-4 times the descent rate 
 """
 from __future__ import annotations
 
+import math
 from typing import Optional
 
 import numpy as np
@@ -54,10 +55,24 @@ def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = N
                 and d[2] <= STEP_SPEED_VH * vh and d[3] <= STEP_TWIST_RAD)
 
 
+def mark_continued(res: TrimResult, prev: TrimResult) -> TrimResult:
+    """Record on ``res`` that it continues the branch through ``prev``: the rotor speed where that
+    branch started (``prev``'s own when ``prev`` was solved on its own), which tells an overspeeding
+    normal branch from the windmill-brake root (:attr:`TrimResult.branch`)."""
+    if res is not None and res.ok:
+        start = prev.omega_branch_start_rad_s
+        res.omega_branch_start_rad_s = float(start if math.isfinite(start) else prev.omega_rad_s)
+    return res
+
+
 def continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[TrimResult] = None,
                 s: float = 1.0) -> TrimResult:
     """One continuation step: the trim of ``model`` from the predictor through ``prev``/``prev2``
-    (never a cold start). The caller checks :func:`on_branch`."""
+    (never a cold start), marked as continued from ``prev``. The caller checks :func:`on_branch`."""
+    return mark_continued(_continue_to(model, hold, prev, prev2, s), prev)
+
+
+def _continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[TrimResult], s: float) -> TrimResult:
     try:
         if model.flight.is_axial:
             res = _trim_axial_from(model, predict(prev, prev2, s, model), hold)

@@ -47,19 +47,40 @@ class TrimResult:
     reason: str = ""
     branch_end: dict = field(default_factory=dict)
     model: Optional[CompiledModel] = None
+    #: rotor speed [rad/s] where the branch this trim was continued along started (the stiff blade);
+    #: nan for a trim solved on its own (a cold start), see :func:`amra_core.continuation.continue_to`
+    omega_branch_start_rad_s: float = float("nan")
 
     @property
     def ok(self) -> bool:
         return self.status == "trimmed"
 
     @property
+    def continued(self) -> bool:
+        """True when this trim was reached by continuation along a branch (not a cold start)."""
+        return math.isfinite(self.omega_branch_start_rad_s)
+
+    @property
     def branch(self) -> str:
-        """``normal`` (autorotation: descent within the turbulent-wake region), ``windmill-brake``
-        (an equilibrium with V_c/v_h < -2: descent faster than twice the hover induced velocity,
-        not autorotation) or ``none`` (no equilibrium)."""
+        """Which equilibrium this is (issue 21 §4), ``none`` without one:
+
+        * ``normal``: autorotation, descent within the turbulent-wake region (V_d <= 2 v_h);
+        * ``overspeed``: beyond 2 v_h, but reached continuously along a branch on which the rotor
+          speed rose above the branch's start and the inflow did not collapse: the normal branch
+          overspeeding (measured, rigid EA 0.32 CG 0.24 GJ 150: 54.7 rad/s, V_d 2.02 v_h, inflow
+          4-7 m/s), not the windmill-brake root;
+        * ``windmill-brake``: beyond 2 v_h and either collapsed inflow (below
+          ``INFLOW_COLLAPSED_RATIO`` v_h), or a separate root (a cold start, or a continued branch
+          whose rotor speed fell): descent 4-6 v_h with inflow about 0.2 v_h at rigid CG 0.36-0.40."""
         if not self.ok or self.model is None or not math.isfinite(self.descent_rate_m_s):
             return "none"
-        return branch_of(self.model, self.descent_rate_m_s)
+        if branch_of(self.model, self.descent_rate_m_s) == "normal":
+            return "normal"
+        vh = _hover_induced(self.model)
+        collapsed = not (self.inflow_m_s >= INFLOW_COLLAPSED_RATIO * vh)
+        if self.continued and not collapsed and self.omega_rad_s > self.omega_branch_start_rad_s:
+            return "overspeed"
+        return "windmill-brake"
 
     @property
     def descent_ratio(self) -> float:
@@ -100,8 +121,16 @@ def _hover_induced(model: CompiledModel) -> float:
 WINDMILL_BRAKE_RATIO = 2.0
 
 
+#: induced velocity below this many v_h is "collapsed": the momentum-theory windmill-brake root
+#: v/v_h = -x/2 - sqrt(x^2/4 - 1) falls below 0.5 beyond a descent of 2.5 v_h, whereas the normal
+#: branch keeps 0.8-1.7 v_h (rigid EA 0.32: 1.5-1.7 v_h near the fold at CG 0.36, 0.8-1.2 v_h
+#: overspeeding at CG 0.24)
+INFLOW_COLLAPSED_RATIO = 0.5
+
+
 def branch_of(model: CompiledModel, descent_rate_m_s: float) -> str:
-    """``windmill-brake`` if ``descent_rate_m_s`` [m/s] exceeds ``WINDMILL_BRAKE_RATIO`` v_h, else ``normal``."""
+    """``windmill-brake`` if ``descent_rate_m_s`` [m/s] exceeds ``WINDMILL_BRAKE_RATIO`` v_h, else
+    ``normal`` (the descent test alone; :attr:`TrimResult.branch` also tells overspeed apart)."""
     return "windmill-brake" if descent_rate_m_s > WINDMILL_BRAKE_RATIO * _hover_induced(model) else "normal"
 
 

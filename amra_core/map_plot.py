@@ -2,8 +2,9 @@
 no GUI backend or global pyplot state is touched).
 
 x: CG position [fraction of chord]; y: GJ [N m^2/rad], log scale. Every computed cell is a marker
-coloured by its verdict; the critical-GJ line joins the columns' critical GJ values (upper end of
-the final bracket); optional marked points (e.g. the paper's unstable cases) are drawn as labelled
+coloured by its verdict; per column every flutter interval is a bar (strong: solid red; weak: light,
+hatched; a fold approach: dotted brown); lines join the columns' fold GJ (brown) and strong-flutter
+GJ (red, dashed), and the critical GJ (the larger, broad blue); optional marked points (e.g. the paper's unstable cases) are drawn as labelled
 crosses. The title names the rotor, fidelity, aerodynamic model, advance ratio and elastic axis.
 """
 from __future__ import annotations
@@ -18,6 +19,7 @@ VERDICT_COLOURS = {
     "overspeed": "#ff7f0e",
     "no-autorotation": "#7f7f7f",
     "windmill-brake": "#17becf",
+    "undetermined": "#bcbd22",
     "failed": "#000000",
 }
 
@@ -41,22 +43,37 @@ def plot_map(bmap, path, marks: Optional[Iterable[tuple]] = None, title: Optiona
         pts = [(c.cg, c.gj_nm2) for c in bmap.cells if c.verdict == verdict]
         if pts:
             xs, ys = zip(*pts)
-            ax.scatter(xs, ys, s=22, c=colour, marker="s", label=f"{verdict} ({len(pts)})", edgecolors="none",
-                       zorder=2)
+            ax.scatter(xs, ys, s=14, c=colour, marker="s", label=f"{verdict} ({len(pts)})", edgecolors="none",
+                       zorder=2, alpha=0.6)
+    # per column: every flutter interval as a bar, strong solid, weak light and hatched (issue 21 §2)
+    seen = set()
+    for col in bmap.columns:
+        for iv in col.get("intervals") or []:
+            if iv["kind"] != "flutter":
+                continue
+            style = "fold approach" if iv.get("fold_approach") else iv.get("strength", "strong")
+            kw = {"strong": dict(facecolor="#d62728", alpha=0.55, hatch=None, edgecolor="#d62728"),
+                  "weak": dict(facecolor="none", alpha=0.9, hatch="////", edgecolor="#f4a3a3"),
+                  "fold approach": dict(facecolor="none", alpha=0.9, hatch="....", edgecolor="#8c564b")}[style]
+            label = {"strong": "strong flutter interval", "weak": f"weak flutter window (damping ratio > "
+                     f"-{spec.weak_damping:g})", "fold approach": "fold approach (merged into the fold)"}[style]
+            ax.bar(col["cg"], iv["gj_hi_nm2"] - iv["gj_lo_nm2"], bottom=iv["gj_lo_nm2"], width=width, lw=0.8,
+                   zorder=2.5, label=None if style in seen else label, **kw)
+            seen.add(style)
+    for key, colour, ls, label in (("fold_gj", "#8c564b", "-", "fold GJ (no autorotation below)"),
+                                   ("flutter_gj", "#d62728", "--", "strong flutter GJ (top)")):
+        pts = [(c["cg"], c.get(key)) for c in bmap.columns if c.get(key) is not None and math.isfinite(c[key])]
+        if pts:
+            xs, ys = zip(*pts)
+            ax.plot(xs, ys, ls, color=colour, lw=1.6, marker="o", ms=3, zorder=3, label=label)
     crit = [(cg, g) for cg, g in bmap.critical_gj if g is not None and math.isfinite(g)]
     if crit:
         xs, ys = zip(*crit)
-        ax.plot(xs, ys, "-", color="#1f77b4", lw=2.0, zorder=3, label="critical GJ (stable above)")
+        ax.plot(xs, ys, "-", color="#1f77b4", lw=2.5, alpha=0.5, zorder=2.8, label="critical GJ (the larger)")
     for cg, g in bmap.critical_gj:
         if g is not None and not math.isfinite(g):
             ax.annotate("unstable at GJ max", (cg, spec.gj_max), textcoords="offset points", xytext=(0, 6),
                         ha="center", fontsize=7, rotation=90)
-    for b in bmap.boundaries:
-        if b["kind"] == "fold" and "stable" not in (b["below"], b["above"]):
-            ax.plot([b["cg"] - width / 2, b["cg"] + width / 2], [b["gj"], b["gj"]], "-", color="#555555", lw=1.2,
-                    zorder=3)
-    if any(b["kind"] == "fold" and "stable" not in (b["below"], b["above"]) for b in bmap.boundaries):
-        ax.plot([], [], "-", color="#555555", lw=1.2, label="fold inside the unstable region")
     for cg, gj, label in (marks or []):
         ax.plot([cg], [gj], "x", color="black", ms=10, mew=2.5, zorder=4)
         ax.annotate(label, (cg, gj), textcoords="offset points", xytext=(6, -12), fontsize=8)

@@ -252,13 +252,14 @@ class CellResult:
     gj_nm2: float
     verdict: str  #: stable | flutter | divergence | overspeed | no-autorotation | windmill-brake | failed
     stable: bool
-    #: 'flutter' (eigenvalue crossing on the branch), 'fold' (no trim), 'windmill-brake', '' if stable
+    #: 'flutter' (eigenvalue crossing on the branch), 'fold' (no trim), 'overspeed' (the normal branch
+    #: overspeeding), 'windmill-brake' (a windmill-brake root), '' if stable
     boundary_kind: str
     growth_rate_per_s: Optional[float]
     frequency_hz: Optional[float]
     omega_trim_rad_s: Optional[float]
     reason: str = ""
-    branch: str = ""  #: trim branch: normal | windmill-brake | none ('' when not known)
+    branch: str = ""  #: trim branch: normal | overspeed | windmill-brake | none ('' when not known)
     descent_rate_m_s: Optional[float] = None  #: of the equilibrium [m/s], None without one
 
     def to_dict(self) -> dict:
@@ -290,6 +291,13 @@ def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
         return CellResult(cg, gj, "windmill-brake", False, "windmill-brake", None, None, res.trim.omega_rad_s,
                           f"equilibrium on the windmill-brake side: descent rate {res.trim.descent_rate_m_s:.1f} m/s "
                           f"({res.trim.descent_ratio:.2f} v_h), not autorotation", "windmill-brake",
+                          float(res.trim.descent_rate_m_s))
+    if res.trim.branch == "overspeed":  # the normal branch continued beyond 2 v_h with the rotor speed risen
+        crit = res.critical
+        return CellResult(cg, gj, "overspeed", False, "overspeed", crit.real_part_per_s if crit else None,
+                          crit.frequency_hz if crit else None, res.trim.omega_rad_s,
+                          f"the normal branch overspeeding: rotor speed {res.trim.omega_rad_s:.1f} rad/s, descent rate "
+                          f"{res.trim.descent_rate_m_s:.1f} m/s ({res.trim.descent_ratio:.2f} v_h)", "overspeed",
                           float(res.trim.descent_rate_m_s))
     return cell_from_modes(cg, gj, res.trim, res.modes)
 

@@ -7,12 +7,18 @@ from dataclasses import dataclass, field
 
 from ..stability import CellResult
 from .spec import VERDICTS, MapSpec, solver_fingerprint
+from .intervals import classify
 from .tasks import cell_class
+
 
 @dataclass
 class BoundaryMap:
     """A (possibly partial) map. ``cells`` sorted by CG then GJ; ``columns``: per CG column its
-    ``critical_gj`` [N m^2/rad], final ``bracket`` and ``status`` (``stable-throughout``,
+    ``fold_gj`` (no normal autorotation below), ``flutter_gj`` (top of the highest *strong*
+    flutter interval), ``critical_gj`` (the larger; weak windows never move it) [N m^2/rad], see
+    :mod:`amra_core.boundary.intervals`; ``intervals`` (each flutter interval with ``strength``,
+    ``peak_growth_rate_1_s``, ``damping_ratio``, ``frequency_hz``, ``mode``, ``participation``,
+    ``fold_approach``), final ``bracket`` and ``status`` (``stable-throughout``,
     ``bracketed``, ``unstable-at-gj-max``, ``unresolved`` (a failed cell at the boundary or the
     bracket not yet at tolerance), ``incomplete`` (cancelled before its coarse cells were done));
     ``boundaries``: every transition; ``cases``: cells in the map; ``cached_cases``: of them read
@@ -58,9 +64,16 @@ class BoundaryMap:
             "spec": self.spec.to_dict(),
             "solver": solver_fingerprint(),
             "critical_gj": [[cg, fin(g)] for cg, g in self.critical_gj],
-            "critical_gj_definition": "upper end of the final bracket (lowest computed GJ stable up to gj_max); "
-                                      "null: see columns[].status",
-            "columns": [{**c, "critical_gj": fin(c["critical_gj"])} for c in self.columns],
+            "fold_gj": [[c["cg"], fin(c.get("fold_gj"))] for c in self.columns],
+            "flutter_gj": [[c["cg"], fin(c.get("flutter_gj"))] for c in self.columns],
+            "critical_gj_definition": "the larger of fold_gj (no normal autorotation below; the lowest computed GJ "
+                                      "above it) and flutter_gj (the lowest computed GJ above the highest strong "
+                                      "flutter interval); weak flutter windows (damping ratio above -weak_damping) "
+                                      "never move it; null: see columns[].status",
+            "weak_damping": self.spec.weak_damping,
+            "columns": [{**c, "critical_gj": fin(c["critical_gj"]), "fold_gj": fin(c.get("fold_gj")),
+                         "flutter_gj": fin(c.get("flutter_gj")), "branch_end_gj": fin(c.get("branch_end_gj"))}
+                        for c in self.columns],
             "boundaries": self.boundaries,
             "cells": [{k: fin(v) for k, v in c.to_dict().items()} for c in self.cells],
             "verdict_counts": self.verdict_counts(),
@@ -111,24 +124,30 @@ def _summarise(spec: MapSpec, by_col: dict, info: dict) -> tuple[list, list]:
             boundaries.append({"cg": cg, "kind": kind, "gj_lo": lo.gj_nm2, "gj_hi": hi.gj_nm2,
                                "gj": math.sqrt(lo.gj_nm2 * hi.gj_nm2), "below": lo.verdict, "above": hi.verdict,
                                "resolved": hi.gj_nm2 / lo.gj_nm2 <= tol and kind != "unknown"})
-        base = {"cg": cg, "fold_gj": col.get("fold_gj"), "intervals": col.get("intervals", [])}
+        c = classify(col.get("intervals", []), spec.gj_max, spec.weak_damping)
+        base = {"cg": cg, "fold_gj": c["fold_gj"], "flutter_gj": c["flutter_gj"], "branch_end_gj": c["branch_end_gj"],
+                "weak_damping": spec.weak_damping, "intervals": c["intervals"]}
         if col.get("failed") or col.get("cancelled"):
             columns.append({**base, "critical_gj": None, "bracket": None,
                             "status": "incomplete" if col.get("cancelled") else "unresolved", "kind": None})
             continue
-        if cell_class(cells[-1]) != "stable":
-            status = "unresolved" if cell_class(cells[-1]) == "failed" else "unstable-at-gj-max"
-            columns.append({**base, "critical_gj": math.inf, "bracket": None, "status": status, "kind": None})
+        top = c["intervals"][-1] if c["intervals"] else None
+        if cell_class(cells[-1]) == "failed":
+            columns.append({**base, "critical_gj": math.inf, "bracket": None, "status": "unresolved", "kind": None})
             continue
-        i = len(cells) - 1
-        while i > 0 and cell_class(cells[i - 1]) == "stable":
-            i -= 1
-        if i == 0:
+        top_weak = top is not None and top["kind"] == "flutter" and top.get("strength") == "weak" \
+            and not top.get("fold_approach")
+        if cell_class(cells[-1]) != "stable" and not top_weak:
+            columns.append({**base, "critical_gj": math.inf, "bracket": None, "status": "unstable-at-gj-max",
+                            "kind": top["kind"] if top is not None else None})
+            continue
+        crit = c["critical_gj"]
+        if crit is None:
             columns.append({**base, "critical_gj": None, "bracket": None, "status": "stable-throughout", "kind": None})
             continue
-        lo, hi = cells[i - 1], cells[i]
-        ok = hi.gj_nm2 / lo.gj_nm2 <= tol and cell_class(lo) != "failed"
-        columns.append({**base, "critical_gj": hi.gj_nm2, "bracket": [lo.gj_nm2, hi.gj_nm2],
-                        "status": "bracketed" if ok else "unresolved",
-                        "kind": cell_class(lo) if cell_class(lo) != "failed" else "unknown"})
+        below = [x.gj_nm2 for x in cells if x.gj_nm2 < crit]
+        lo = max(below) if below else None
+        ok = lo is not None and crit / lo <= tol and cell_class(next(x for x in cells if x.gj_nm2 == lo)) != "failed"
+        columns.append({**base, "critical_gj": crit, "bracket": [lo, crit] if lo is not None else None,
+                        "status": "bracketed" if ok else "unresolved", "kind": c["kind"]})
     return columns, boundaries

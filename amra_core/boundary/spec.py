@@ -20,8 +20,12 @@ from .. import __version__
 from ..flight import AERO_MODELS, FlightCondition, SolverSettings
 from ..rotor import Rotor
 from ..shapes import FIDELITIES
+from ..verdict import VERDICTS as RUN_VERDICTS
+from .intervals import WEAK_DAMPING
 
-VERDICTS = ("stable", "flutter", "divergence", "overspeed", "no-autorotation", "windmill-brake", "failed")
+#: a map cell's verdict: a run's verdict word (one vocabulary, :data:`amra_core.verdict.VERDICTS`), or
+#: ``failed`` (a numerical failure or a crashed worker: no physics verdict)
+VERDICTS = tuple(v for v in RUN_VERDICTS if v not in ("numerical-failure", "undetermined")) + ("undetermined", "failed")
 METHODS = ("eigen", "time")
 DEFAULT_CG = tuple(round(float(x), 6) for x in np.linspace(0.20, 0.50, 16))
 
@@ -76,7 +80,9 @@ class MapSpec:
     ``n_coarse``: GJ values of the log grid on which a column is probed by cold starts below a fold
     (and the largest walk step is at most its spacing); ``method``: ``eigen`` (linearised about trim)
     or ``time`` (the walk's points judged by time marching from their trim plus a perturbation);
-    ``n_elements``: FEM elements per blade.
+    ``n_elements``: FEM elements per blade; ``weak_damping``: a flutter interval whose most unstable
+    oscillating mode has a damping ratio above ``-weak_damping`` is weak (reported, never the
+    critical GJ; :data:`~amra_core.boundary.intervals.WEAK_DAMPING` says why 0.02) [-].
     """
 
     rotor: Union[str, Rotor] = "paper-boundary"
@@ -91,6 +97,7 @@ class MapSpec:
     n_coarse: int = 7
     method: str = "eigen"
     n_elements: int = 10
+    weak_damping: float = WEAK_DAMPING
 
     def __post_init__(self):
         if not isinstance(self.rotor, (str, Rotor)):
@@ -117,6 +124,7 @@ class MapSpec:
         _num("gj_rel_tol", self.gj_rel_tol, 1e-4, 1.0)
         if isinstance(self.n_coarse, bool) or not isinstance(self.n_coarse, int) or not 2 <= self.n_coarse <= 200:
             raise MapSpecError(f"n_coarse = {self.n_coarse!r} is not allowed: must be an integer in [2, 200]")
+        _num("weak_damping", self.weak_damping, 0.0, 1.0)
         if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, int) or not 1 <= self.n_elements <= 60:
             raise MapSpecError(f"n_elements = {self.n_elements!r} is not allowed: must be an integer in [1, 60]")
 

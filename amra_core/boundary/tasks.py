@@ -16,14 +16,16 @@ def failed_cell(cg: float, gj: float, reason: str) -> CellResult:
 
 
 def cell_class(c: CellResult) -> str:
-    """``stable`` | ``flutter`` (trimmed, unstable) | ``fold`` (no trim) | ``windmill-brake`` | ``failed``."""
+    """``stable`` | ``flutter`` (trimmed, unstable) | ``fold`` (no normal autorotation: no trim, or the
+    normal branch overspeeding) | ``windmill-brake`` (a windmill-brake equilibrium) | ``failed``."""
     if c.verdict == "failed":
         return "failed"
-    if c.verdict == "windmill-brake":
+    if c.verdict == "windmill-brake" or c.branch == "windmill-brake":
         return "windmill-brake"
     if c.stable:
         return "stable"
-    return "fold" if c.boundary_kind == "fold" or c.verdict in ("no-autorotation", "overspeed") else "flutter"
+    return "fold" if c.boundary_kind in ("fold", "overspeed") or c.verdict in ("no-autorotation", "overspeed") \
+        else "flutter"
 
 
 # ----------------------------------------------------------------------------- columns
@@ -59,22 +61,33 @@ class ColumnResult:
 
 
 def cells_of_walk(cg: float, points: list, top_omega: Optional[float] = None) -> list:
-    """The map cells of a column walk's points (GJ ascending)."""
+    """The map cells of a column walk's points (GJ ascending). Verdicts use the words of a run's
+    verdict (:data:`amra_core.verdict.VERDICTS`) so a cell and ``amra simulate`` of it can agree:
+    a windmill-brake root below a fold is ``no-autorotation`` (a run started there from the branch
+    end descends into that state; the cell keeps ``branch`` and ``boundary_kind`` windmill-brake),
+    the normal branch overspeeding is ``overspeed``."""
     from ..stability import cell_from_modes
     pts = sorted(points, key=lambda p: p.gj_nm2)
+    on_branch = ("normal", "overspeed")
     if top_omega is None:
-        tops = [p for p in pts if p.branch == "normal"]
+        tops = [p for p in pts if p.branch in on_branch]
         top_omega = tops[-1].trim.omega_rad_s if tops else None
     cells = []
     for i, p in enumerate(pts):
         kind = p.kind
         if kind in ("stable", "flutter"):
             c = cell_from_modes(cg, p.gj_nm2, p.trim, p.modes)
+        elif kind == "overspeed":
+            crit = p.critical
+            c = CellResult(cg, p.gj_nm2, "overspeed", False, "overspeed",
+                           None if crit is None else crit.real_part_per_s, None if crit is None else crit.frequency_hz,
+                           float(p.trim.omega_rad_s), p.reason, "overspeed", float(p.trim.descent_rate_m_s))
         elif kind == "windmill-brake":
-            c = CellResult(cg, p.gj_nm2, "windmill-brake", False, "windmill-brake", None, None,
-                           float(p.trim.omega_rad_s), p.reason, "windmill-brake", float(p.trim.descent_rate_m_s))
+            c = CellResult(cg, p.gj_nm2, "no-autorotation", False, "windmill-brake", None, None,
+                           float(p.trim.omega_rad_s), "no normal autorotation; " + p.reason, "windmill-brake",
+                           float(p.trim.descent_rate_m_s))
         elif kind == "fold":
-            above = next((q for q in pts[i + 1:] if q.branch == "normal"), None)
+            above = next((q for q in pts[i + 1:] if q.branch in on_branch), None)
             rising = above is not None and top_omega is not None and above.trim.omega_rad_s > top_omega
             c = CellResult(cg, p.gj_nm2, "overspeed" if rising else "no-autorotation", False, "fold", None, None,
                            None, p.reason or "no trim on the normal branch", "none")
@@ -89,15 +102,16 @@ def _time_cells(task: ColumnTask, points: list, cells: list) -> list:
     from ..simulation import Case, Simulation
     out = []
     for p, c in zip(sorted(points, key=lambda p: p.gj_nm2), cells):
-        if p.branch != "normal":
+        if p.branch not in ("normal", "overspeed"):
             out.append(c)
             continue
         rotor = task.rotor.with_overrides(gj_nm2=p.gj_nm2, x_cg=task.cg)
         sim = Simulation(Case(rotor, task.flight, task.settings, t_end_s=8.0), trim_result=p.trim).run()
         v = sim.verdict()
-        out.append(CellResult(task.cg, p.gj_nm2, v.verdict, v.verdict == "stable",
-                              "" if not v.unstable else "flutter", v.growth_rate_per_s, v.frequency_hz,
-                              p.trim.omega_rad_s, v.explanation, "normal", float(p.trim.descent_rate_m_s)))
+        kind = "" if not v.unstable else ("overspeed" if v.verdict == "overspeed" else "flutter")
+        out.append(CellResult(task.cg, p.gj_nm2, v.verdict, v.verdict == "stable", kind, v.growth_rate_per_s,
+                              v.frequency_hz, p.trim.omega_rad_s, v.explanation, p.branch,
+                              float(p.trim.descent_rate_m_s)))
     return out
 
 

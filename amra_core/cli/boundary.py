@@ -2,10 +2,13 @@
 
     amra boundary --preset paper-boundary --fidelity rigid --mu 0 --ea 0.32 \\
         [--cg 0.20:0.50:16] [--gj 30:3000] [--aero theodorsen] [--method eigen|time] \\
-        [--workers N] [--scheduler ADDR] [--store FILE] [--out map.csv] [--plot map.png] [--json] [--quiet]
+        [--weak-damping 0.02] [--workers N] [--scheduler ADDR] [--store FILE] [--out map.csv] [--plot map.png] [--json] [--quiet]
 
-Prints the critical GJ per CG column with every interval of the column (stable, flutter, fold,
-windmill-brake; GJ in N m^2/rad) (or, with ``--json``, an object with ``critical_gj``,
+Prints per CG column the fold GJ (no normal autorotation below), the flutter GJ (top of the highest
+strong instability) and the critical GJ (the larger), with every interval of the column (stable,
+flutter with its strength and mode, fold, overspeed, windmill-brake; GJ in N m^2/rad);
+``--weak-damping`` sets the damping ratio below which a flutter interval is strong (or, with
+``--json``, an object with ``fold_gj``, ``flutter_gj``, ``critical_gj``, ``columns``,
 ``boundaries``, ``cells``, ``cases``, ``cached_cases``, ``wall_time_s``, ...). A progress bar goes
 to stderr when it is a terminal. Bad values exit with code 2 and a message naming the parameter and
 its allowed range. Ctrl-C (SIGINT) or SIGTERM cancels the map cleanly: the workers are stopped, the
@@ -24,6 +27,7 @@ import sys
 import threading
 import warnings
 
+from ..boundary.intervals import WEAK_DAMPING
 from ..flight import AERO_MODELS
 from ..shapes import FIDELITIES
 from .common import dumps_strict, number, value_range
@@ -54,6 +58,10 @@ def register(sub) -> None:
                    help="eigen: linearised about trim; time: time marching from trim plus a kick")
     p.add_argument("--elements", type=number("--elements", 1, 60, integer=True), default=10,
                    help="FEM elements per blade")
+    p.add_argument("--weak-damping", type=number("--weak-damping", 0.0, 1.0), default=WEAK_DAMPING,
+                   help=f"flutter intervals whose most unstable oscillating mode has a damping ratio above minus "
+                        f"this are weak: shown and exported, but they do not move the critical GJ "
+                        f"(default {WEAK_DAMPING:g}; 0: every instability is strong)")
     p.add_argument("--workers", type=number("--workers", 1, 512, integer=True),
                    help="local worker processes (default: the CPU count; 1 = in this process; "
                         "at most 4 per CPU core, more are capped with a message)")
@@ -86,7 +94,7 @@ def _spec(args):
         base.with_overrides(x_ea=args.ea, x_cg=cg)
     return MapSpec(rotor=rotor, fidelity=args.fidelity, aero=args.aero, mu=args.mu, ea=args.ea, cg_values=cgs,
                    gj_min=args.gj[0], gj_max=args.gj[1], gj_rel_tol=args.tol, n_coarse=args.coarse,
-                   method=args.method, n_elements=args.elements)
+                   method=args.method, n_elements=args.elements, weak_damping=args.weak_damping)
 
 
 def _warn(msg: str) -> None:
@@ -202,17 +210,27 @@ def cmd_boundary(args) -> int:
         print(f"{spec.rotor_name()}, {spec.fidelity}, {spec.aero}, mu {spec.mu:g}, EA {spec.ea:g}, method {spec.method}: "
               f"{bmap.cases} cells ({bmap.cached_cases} from store) in {bmap.wall_time_s:.2f} s"
               + (" -- interrupted, partial map" if bmap.cancelled else ""))
-        print(f"{'CG [c]':>8s} {'critical GJ [N m^2/rad]':>24s} {'bracket':>22s}  status")
+        print(f"GJ in N m^2/rad; fold: no normal autorotation below; flutter: top of the highest strong instability; "
+              f"critical: the larger; weak: damping ratio above -{spec.weak_damping:g}")
+        print(f"{'CG [c]':>8s} {'fold GJ':>9s} {'flutter GJ':>11s} {'critical GJ':>12s} {'bracket':>22s}  status")
+
+        def gjs(g):
+            return "-" if g is None else ("> GJ max" if not math.isfinite(g) else f"{g:.1f}")
         for col in bmap.columns:
-            g = col["critical_gj"]
-            gs = "-" if g is None else ("> GJ max" if not math.isfinite(g) else f"{g:.1f}")
             br = "" if not col["bracket"] else f"[{col['bracket'][0]:.1f}, {col['bracket'][1]:.1f}]"
-            print(f"{col['cg']:8.3f} {gs:>24s} {br:>22s}  {col['status']}" + (f" ({col['kind']})" if col.get("kind") else ""))
-            ivs = col.get("intervals") or []
-            if ivs:
-                print(" " * 10 + "; ".join(f"{iv['kind']} {iv['gj_lo_nm2']:.0f}-{iv['gj_hi_nm2']:.0f}"
-                                           + ("" if iv.get("resolved", True) else " (edge from the probe grid)")
-                                           for iv in ivs))
+            print(f"{col['cg']:8.3f} {gjs(col.get('fold_gj')):>9s} {gjs(col.get('flutter_gj')):>11s} "
+                  f"{gjs(col['critical_gj']):>12s} {br:>22s}  {col['status']}"
+                  + (f" ({col['kind']})" if col.get("kind") else ""))
+            for iv in col.get("intervals") or []:
+                line = f"{iv['kind']} {iv['gj_lo_nm2']:.0f}-{iv['gj_hi_nm2']:.0f}"
+                if iv["kind"] == "flutter":
+                    line += f" {'fold approach' if iv.get('fold_approach') else iv.get('strength', '')}"
+                    if iv.get("peak_growth_rate_1_s") is not None:
+                        line += (f": peak {iv['peak_growth_rate_1_s']:+.2f} 1/s, damping ratio {iv['damping_ratio']:+.4f},"
+                                 f" {iv['frequency_hz']:.1f} Hz, {iv['mode']}")
+                if not iv.get("resolved", True):
+                    line += " (edge from the probe grid)"
+                print(" " * 10 + line)
         for k in ("csv", "plot"):
             if k in out:
                 print(f"{k}: {out[k]}")

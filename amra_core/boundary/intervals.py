@@ -1,0 +1,111 @@
+"""Fold and flutter boundaries of a map column, from its intervals (issue 21 §2).
+
+A column walk (:mod:`amra_core.column`) covers the GJ range with intervals of one kind each:
+``stable``, ``flutter`` (trimmed on the normal branch with a mode of positive real part; the
+interval says which mode, :func:`amra_core.column.instability`), ``fold`` (no normal-branch trim),
+``overspeed`` (the normal branch continued, rotor speed risen and descent beyond 2 v_h),
+``windmill-brake`` (a separate root below a fold) and ``failed``. From them, per column:
+
+* ``fold_gj`` [N m^2/rad]: no normal autorotation below (the lowest computed GJ above the highest
+  ``fold`` / ``overspeed`` / ``windmill-brake`` interval, or above a fold approach merged into it);
+* ``flutter_gj``: the lowest computed GJ above the highest *strong* flutter interval (None if none);
+* ``critical_gj``: the larger of the two (None if neither; ``inf`` when the column is not stable at
+  ``gj_max``); weak windows are reported but never move it.
+
+**Strength.** A flutter interval is ``weak`` when its most unstable oscillating mode has a damping
+ratio above ``-weak_damping`` (and nothing non-oscillatory grows), else ``strong``. A monotonic
+(non-oscillating) growth is always strong, except in a fold approach.
+
+**Fold approach.** A flutter interval directly above a ``fold`` interval in which no blade mode
+(teeter, flap, torsion, lag) oscillates strongly is the fold's own approach (at the fold a real eigenvalue of the rotor speed / inflow /
+descent equilibrium passes through zero; measured, rigid axial EA 0.32 CG 0.36: GJ 270-281 above
+the branch end at 273, a 0.23 Hz inflow mode at +0.15 1/s and a 3.9 Hz teeter mode at damping ratio
+-0.0035): it is merged into the fold (``fold_approach: true``) and moves ``fold_gj`` to its top.
+
+**The default threshold** :data:`WEAK_DAMPING` = 0.02 (see its comment for the evidence).
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+#: Flutter intervals whose most unstable oscillating mode has a damping ratio above -WEAK_DAMPING
+#: are "weak". Evidence (paper-boundary, EA 0.32, theodorsen; 20 s runs from the default kick):
+#: rigid axial CG 0.40, GJ 628-662: peak +1.06 1/s, damping ratio -0.012 at 12-14 Hz; from the
+#: default kick the twist oscillation levels off at +/-0.38 deg (teeter +/-0.13 deg), below twice
+#: the kick (0.29 deg), its growth visible only from a 1e-5 rad kick. Rigid axial CG 0.36, GJ
+#: 438-485: peak +5.1 1/s, damping ratio -0.072 at 11 Hz, settles at +/-0.84 deg twist within 2 s.
+#: Quasi-steady aerodynamics at CG 0.40 GJ 660: +17 1/s (damping ratio about -0.2). A damping ratio
+#: of -0.02 at the 11-14 Hz torsion modes is a growth of 1.4-1.8 1/s: an amplitude that doubles in
+#: under half a second is not a marginal effect, whereas the windows the audit called marginal sit at
+#: -0.01 to -0.013. The map's intervals (see the validation report) fall on either side of it.
+WEAK_DAMPING = 0.02
+
+NO_AUTOROTATION = ("fold", "overspeed", "windmill-brake")
+
+
+def strength_of(iv: dict, weak_damping: float = WEAK_DAMPING) -> str:
+    """``weak`` | ``strong`` of a flutter interval (module docstring). Intervals without mode data
+    (judged by time marching) are ``strong``: nothing says they are marginal."""
+    osc, mono = iv.get("oscillatory"), iv.get("monotonic_growth_rate_1_s")
+    if osc is None and mono is None:
+        return "strong" if iv.get("peak_growth_rate_1_s") is None or iv.get("damping_ratio") is None \
+            or -iv["damping_ratio"] >= weak_damping else "weak"
+    if mono is not None:
+        return "strong"
+    return "strong" if -osc["damping_ratio"] >= weak_damping else "weak"
+
+
+def _fold_approach_modes(iv: dict, weak_damping: float) -> bool:
+    """True when nothing in ``iv`` but the equilibrium's own modes (rotor speed, inflow, descent, or
+    a monotonic growth) is strongly unstable: no blade mode oscillates with a damping ratio below
+    ``-weak_damping``."""
+    if iv.get("oscillatory") is None and iv.get("monotonic_growth_rate_1_s") is None:
+        return False  # no mode data (judged by time marching): not known to be an approach
+    blade = iv.get("oscillatory_blade")
+    return blade is None or -blade["damping_ratio"] < weak_damping
+
+
+def classify(intervals: list, gj_max: float, weak_damping: float = WEAK_DAMPING) -> dict:
+    """Per column (module docstring): ``intervals`` (copies, ascending, each flutter interval with
+    ``strength`` and ``fold_approach``), ``fold_gj``, ``branch_end_gj`` (top of the highest
+    no-autorotation interval before merging), ``flutter_gj``, ``critical_gj``, ``kind`` (which one
+    sets the critical GJ: ``fold`` | ``flutter``) and ``resolved`` (its edge bracketed to tolerance)."""
+    ivs = sorted((dict(iv) for iv in intervals), key=lambda iv: iv["gj_lo_nm2"])
+    for i, iv in enumerate(ivs):
+        if iv["kind"] != "flutter":
+            continue
+        below = ivs[i - 1] if i > 0 else None
+        iv["fold_approach"] = bool(below is not None and (below["kind"] == "fold" or below.get("fold_approach"))
+                                   and _fold_approach_modes(iv, weak_damping))
+        iv["strength"] = strength_of(iv, weak_damping) if not iv["fold_approach"] else "weak"
+
+    def above(i: int) -> Optional[float]:
+        """The lowest computed GJ above interval i (None at the top of the range)."""
+        if i + 1 >= len(ivs):
+            return None
+        nxt = ivs[i + 1]
+        return nxt.get("gj_lo_point_nm2", nxt["gj_lo_nm2"])
+
+    def top_of(pred) -> tuple:
+        idx = [i for i, iv in enumerate(ivs) if pred(iv)]
+        if not idx:
+            return None, None
+        i = idx[-1]
+        g = above(i)
+        return (math.inf if g is None else g), ivs[i]
+
+    branch_end, _ = top_of(lambda iv: iv["kind"] in NO_AUTOROTATION)
+    fold, fold_iv = top_of(lambda iv: iv["kind"] in NO_AUTOROTATION or iv.get("fold_approach"))
+    flutter, flutter_iv = top_of(lambda iv: iv["kind"] == "flutter" and not iv.get("fold_approach")
+                                 and iv.get("strength") == "strong")
+    cands = [(g, k, iv) for g, k, iv in ((fold, "fold", fold_iv), (flutter, "flutter", flutter_iv)) if g is not None]
+    crit, kind, resolved = None, None, True
+    if cands:
+        crit, kind, civ = max(cands, key=lambda c: c[0])
+        resolved = bool(civ.get("resolved", True))
+    top = ivs[-1] if ivs else None
+    if top is not None and top["kind"] == "failed":
+        resolved = False
+    return {"intervals": ivs, "fold_gj": fold, "branch_end_gj": branch_end, "flutter_gj": flutter,
+            "critical_gj": crit, "kind": kind, "resolved": resolved}
