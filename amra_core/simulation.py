@@ -332,7 +332,8 @@ class Simulation:
             return judge_after_change(self.history, HISTORY_COLUMNS, row, what, self.omega_ref, fl.is_axial,
                                       self.status, new_row, new_omega, trimmed, scale, hover_induced_m_s=v_h)
         return judge(self.history, HISTORY_COLUMNS, self.omega_ref, fl.is_axial, self.status,
-                     self.trim.ok, self.reference_row, scale, hover_induced_m_s=v_h)
+                     self.trim.ok, self.reference_row, scale, hover_induced_m_s=v_h,
+                     branch=self.trim.branch if self.trim.ok else None)
 
     def _row(self, y: np.ndarray, model: Optional[CompiledModel] = None) -> np.ndarray:
         m = (model or self.model).arrays

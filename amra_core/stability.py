@@ -292,7 +292,7 @@ def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
                           f"equilibrium on the windmill-brake side: descent rate {res.trim.descent_rate_m_s:.1f} m/s "
                           f"({res.trim.descent_ratio:.2f} v_h), not autorotation", "windmill-brake",
                           float(res.trim.descent_rate_m_s))
-    if res.trim.branch == "overspeed":  # the normal branch continued beyond 2 v_h with the rotor speed risen
+    if res.trim.branch == "overspeed" and res.stable:  # the normal branch beyond 2 v_h, rotor speed risen
         crit = res.critical
         return CellResult(cg, gj, "overspeed", False, "overspeed", crit.real_part_per_s if crit else None,
                           crit.frequency_hz if crit else None, res.trim.omega_rad_s,

@@ -11,6 +11,18 @@ into the windmill-brake state (axial flight, descent beyond 2 v_h) or still fall
 settled at another rotor speed: the motion after it settled is judged as a trimmed run's would be
 (the explanation says where it settled); still moving otherwise: ``undetermined`` (run longer).
 No data, or too little for the envelope fit: ``undetermined`` with the reason, never ``stable``.
+
+A ``stable`` verdict also needs a run long enough to see an instability (issue 21 §7): the fitted
+part must span at least :data:`STABLE_MIN_CYCLES` cycles of the dominant motion and
+:data:`STABLE_MIN_FIT_S` seconds (a growth at the instability threshold changes the envelope by
+10 % over it); a shorter run that seems to decay is ``undetermined (run too short)``.
+
+Every verdict carries its **outcome** (issue 21 §1): ``decays``, ``bounded-oscillation`` (a limit
+cycle: an oscillation that neither decays nor grows at the end, reported with its twist, teeter and
+rotor-speed amplitudes in ``limit_cycle``; its verdict is ``flutter``, model-notes §7),
+``rotor-speed-collapse`` (rotor speed below 50 % of trim, ``collapse_time_s``), ``runaway`` (still
+growing, or the state still leaving its start at the end) or ``undetermined``; and a
+``rotor_speed`` headline: whether the rotor kept its rotor speed, the paper's question.
 """
 from __future__ import annotations
 
@@ -42,6 +54,19 @@ MIN_FLUTTER_HZ = 0.3
 WINDMILL_BRAKE_RATIO = 2.0 + EMP_BLEND
 
 
+#: a run called ``stable`` must cover at least this many cycles of its dominant motion in the fitted
+#: part (fewer: its decay may be a transient of faster modes hiding a slow one)
+STABLE_MIN_CYCLES = 5
+#: ...and this long [s]: a growth at GROWTH_THRESHOLD_PER_S changes the envelope by 10 % over it
+#: (measured on rigid CG 0.40 GJ 645: a 0.5 s run fits -4.4 1/s, a 10 s run -0.55 1/s)
+STABLE_MIN_FIT_S = math.log(1.1) / GROWTH_THRESHOLD_PER_S
+#: an oscillation whose envelope over the last third falls slower than this [1/s] is not decaying:
+#: with at least a tenth of the starting envelope left it is a bounded oscillation (limit cycle)
+SUSTAINED_SLOPE_PER_S = -0.25 * GROWTH_THRESHOLD_PER_S
+SUSTAINED_FRACTION = 0.1
+OUTCOMES = ("decays", "bounded-oscillation", "rotor-speed-collapse", "runaway", "undetermined")
+
+
 @dataclass
 class Verdict:
     verdict: str
@@ -50,6 +75,12 @@ class Verdict:
     collapse_time_s: Optional[float]  #: time at which the rotor speed fell below 50 % of trim
     amplitude: Optional[float] = None  #: final envelope of the normalised deviation [-]
     explanation: str = ""
+    outcome: str = "undetermined"  #: one of OUTCOMES
+    #: bounded oscillation only: half the peak-to-peak over the last third of the run of the tip twist
+    #: of blade 0 [deg], the teeter angle [deg] and the rotor speed [rad/s] (forward flight: of their
+    #: change over one revolution, halved)
+    limit_cycle: Optional[dict] = None
+    rotor_speed: str = ""  #: the headline: did the rotor keep its rotor speed
 
     @property
     def unstable(self) -> bool:
@@ -104,6 +135,76 @@ def _envelope_fit(t, e, window):
     use = slice(n // 3, n)  # fit after the fast initial transients
     slope = np.polyfit(tc[use], ec[use], 1)[0]
     return float(slope), float(np.exp(ec[-1])), float(np.exp(ec[0]))
+
+
+def _envelope_series(t, e, window):
+    """(window centres, log envelope) of ``e`` (max per window), or None with fewer than 3 windows."""
+    ok = np.isfinite(e)
+    t, e = t[ok], e[ok]
+    if len(t) < 4:
+        return None
+    edges = np.arange(t[0], t[-1] + window, window)
+    tc, ec = [], []
+    for a, b in zip(edges[:-1], edges[1:]):
+        sel = (t >= a) & (t < b)
+        if sel.sum() >= 2 and e[sel].max() > 0:
+            tc.append(0.5 * (a + b)); ec.append(e[sel].max())
+    if len(tc) < 3:
+        return None
+    return np.array(tc), np.log(np.array(ec))
+
+
+def _sustained(t, e, window, amp_start) -> bool:
+    """True if the envelope of ``e`` over the last third of the run neither decays (slope above
+    SUSTAINED_SLOPE_PER_S) nor has fallen below SUSTAINED_FRACTION of its start: a bounded oscillation."""
+    ser = _envelope_series(t, e, window)
+    if ser is None or amp_start is None:
+        return False
+    tc, ec = ser
+    n = len(tc)
+    if n < 9:
+        return False
+    last = slice(2 * n // 3, n)
+    slope = np.polyfit(tc[last], ec[last], 1)[0]
+    return bool(slope > SUSTAINED_SLOPE_PER_S and math.exp(ec[-1]) >= SUSTAINED_FRACTION * amp_start)
+
+
+def _limit_cycle(h, cols, d, scale, axial) -> dict:
+    """Half peak-to-peak over the last third: tip twist of blade 0 [deg], teeter [deg], rotor speed [rad/s]."""
+    t = h[:, cols["t_s"]]
+    sel = t >= t[0] + 2.0 * (t[-1] - t[0]) / 3.0
+    if axial:
+        tw, te, om = (h[sel, cols[k]] for k in ("tip_twist_0_rad", "teeter_rad", "omega_rad_s"))
+        half = 0.5
+    else:  # the change over one revolution (d, normalised): halved once more
+        dd = d[sel]
+        ok = np.isfinite(dd).all(axis=1)
+        tw, te = dd[ok, 1] * scale, dd[ok, 0] * scale
+        om = h[sel, cols["omega_rad_s"]]
+        half = 0.25
+    return {"twist_deg": float(math.degrees(half * np.ptp(tw))) if len(tw) else None,
+            "teeter_deg": float(math.degrees(half * np.ptp(te))) if len(te) else None,
+            "omega_rad_s": float(0.5 * np.ptp(om)) if len(om) else None}
+
+
+def _headline(v: "Verdict", t, om, omega_ref: float) -> str:
+    if v.verdict == "numerical-failure":
+        return f"rotor speed unknown: the run failed numerically at t = {float(t[-1]):.2f} s"
+    if v.collapse_time_s is not None:
+        return (f"rotor speed LOST: below 50 % of trim ({0.5 * omega_ref:.1f} rad/s) at t = {v.collapse_time_s:.2f} s")
+    if len(om) == 0:
+        return "rotor speed: no data"
+    end, t_end = float(om[-1]), float(t[-1])
+    if v.verdict == "overspeed" and end > 1.5 * omega_ref:
+        return f"rotor speed ran away upwards: {end:.1f} rad/s at t = {t_end:.1f} s (start {omega_ref:.1f} rad/s)"
+    change = 100.0 * (end / omega_ref - 1.0)
+    if v.verdict == "overspeed":
+        return (f"rotor speed held high: {end:.1f} rad/s at t = {t_end:.1f} s ({change:+.0f} % of the start), "
+                f"on the overspeeding branch")
+    if v.verdict == "no-autorotation":
+        return (f"rotor speed not kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change:+.0f} % of the start, "
+                f"{omega_ref:.1f} rad/s), no normal autorotation")
+    return f"rotor speed kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change:+.0f} % of the start, {omega_ref:.1f} rad/s)"
 
 
 def _dominant_frequency(t, d):
@@ -166,13 +267,34 @@ def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
 
 def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: str,
           trimmed: bool, ref_row: np.ndarray, perturbation_scale: float = 0.01,
-          hover_induced_m_s: Optional[float] = None) -> Verdict:
+          hover_induced_m_s: Optional[float] = None, branch: Optional[str] = None) -> Verdict:
     """Classify a run. ``status`` is the Simulation's (running/finished/numerical-failure/
     rotor-stopped/overspeed-stop); ``trimmed`` says whether a steady autorotation existed for the
     parameters; ``ref_row`` is the history row of the unperturbed starting state;
-    ``hover_induced_m_s`` (v_h [m/s]) enables the windmill-brake checks (descent beyond 2 v_h)."""
+    ``hover_induced_m_s`` (v_h [m/s]) enables the windmill-brake checks (descent beyond 2 v_h);
+    ``branch``: the trim's :attr:`~amra_core.equilibrium.TrimResult.branch` (``overspeed`` and
+    ``windmill-brake`` starts are named so; None: told from the descent rate). The verdict carries
+    its outcome and rotor-speed headline (module docstring)."""
+    v = _judge(history, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_scale,
+               hover_induced_m_s, branch)
     cols = {c: i for i, c in enumerate(columns)}
-    h = history
+    if len(history):
+        v.rotor_speed = _headline(v, history[:, cols["t_s"]], history[:, cols["omega_rad_s"]], omega_ref)
+    if v.outcome == "undetermined" and v.verdict != "undetermined":
+        if v.collapse_time_s is not None:
+            v.outcome = "rotor-speed-collapse"
+        elif v.verdict == "stable" or (v.verdict in ("overspeed", "windmill-brake") and trimmed
+                                       and (v.growth_rate_per_s is None or v.growth_rate_per_s <= GROWTH_THRESHOLD_PER_S)
+                                       and len(history) and history[-1, cols["omega_rad_s"]] <= 1.5 * omega_ref):
+            v.outcome = "decays"
+        elif v.verdict != "numerical-failure":
+            v.outcome = "runaway"
+    return v
+
+
+def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_scale, hover_induced_m_s,
+           branch) -> Verdict:
+    cols = {c: i for i, c in enumerate(columns)}
     if len(h) == 0:
         return Verdict("undetermined", None, None, None, explanation="no data yet: nothing has been simulated")
     if status == "numerical-failure" or not np.isfinite(h).all():
@@ -189,15 +311,19 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     freq = _dominant_frequency(t[:end], d[:end])
     oscill = freq is not None and freq >= MIN_FLUTTER_HZ
     if status == "overspeed-stop" or om[-1] > 1.5 * omega_ref:
-        return Verdict("overspeed", growth, freq, collapse, amp_end, "rotor speed ran away upwards")
+        return Verdict("overspeed", growth, freq, collapse, amp_end, "rotor speed ran away upwards", "runaway")
     if collapse is not None or status == "rotor-stopped":
-        if growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill:
-            why = "coupled oscillation grew, then the rotor speed collapsed"
-            return Verdict("flutter", growth, freq, collapse, amp_end, why)
-        if not trimmed:
-            return Verdict("no-autorotation", growth, freq, collapse, amp_end,
-                           "no torque equilibrium exists: the rotor speed decayed from the start")
-        return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero")
+        grew = growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill
+        if not trimmed:  # the headline: no equilibrium, the rotor speed is lost (an oscillation on the way is told)
+            why = "no torque equilibrium exists: the rotor speed decayed from the start"
+            if grew:
+                why += f" (a coupled oscillation at {freq:.1f} Hz grew on the way, {growth:+.2f} 1/s)"
+            return Verdict("no-autorotation", growth, freq, collapse, amp_end, why, "rotor-speed-collapse")
+        if grew:
+            return Verdict("flutter", growth, freq, collapse, amp_end,
+                           "coupled oscillation grew, then the rotor speed collapsed", "rotor-speed-collapse")
+        return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero",
+                       "rotor-speed-collapse")
     # axial flight only: in forward flight the mass flow is set by the airspeed, and a descent
     # rate of a few v_h is an ordinary glide (15 m/s at 80 m/s airspeed is an 11 deg path)
     wb = _windmill_brake(h, cols, t, window, hover_induced_m_s) if axial else None
@@ -206,7 +332,7 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
         return Verdict("no-autorotation", growth, freq, None, amp_end,
                        f"normal autorotation was lost: the descent rate rose from {vd0:.1f} to {vd_end:.1f} m/s "
                        f"= {x_end:.1f} v_h, the windmill-brake state (V_c/v_h < -{WINDMILL_BRAKE_RATIO:g}), while "
-                       f"the rotor speed went from {om[0]:.1f} to {om[-1]:.1f} rad/s")
+                       f"the rotor speed went from {om[0]:.1f} to {om[-1]:.1f} rad/s", "runaway")
     if not trimmed:
         drift = (om[0] - om[-1]) / omega_ref
         state = _settle_state(t, om, window) if abs(drift) > 0.05 else ("none",)
@@ -224,7 +350,8 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
             v.collapse_time_s = collapse
             return v
         if growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill:
-            return Verdict("flutter", growth, freq, collapse, amp_end, "growing coupled oscillation (no trim exists)")
+            return Verdict("flutter", growth, freq, collapse, amp_end, "growing coupled oscillation (no trim exists)",
+                           "runaway")
         if state[0] == "moving":
             return Verdict("undetermined", growth, freq, collapse, amp_end,
                            f"the rotor speed moved {100 * abs(drift):.0f} % from the branch end and had not settled "
@@ -232,7 +359,7 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
         if drift > 0.05:
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end "
-                           f"and was still falling at the end of the run")
+                           f"and was still falling at the end of the run", "runaway")
     if growth is None:
         window_s = max(2 * math.pi / omega_ref, 0.1)
         need = (3 * window_s + (0.0 if axial else 2 * math.pi / omega_ref))
@@ -243,15 +370,47 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     if growth > GROWTH_THRESHOLD_PER_S or (amp_end is not None and amp_end > 20.0):
         kind = "flutter" if oscill else "divergence"
         why = "growing oscillation" if oscill else "monotonic runaway"
+        outcome = "runaway"
         if growth <= GROWTH_THRESHOLD_PER_S:
             why = "saturated into a limit cycle 20x larger than the perturbation"
-        return Verdict(kind, growth, freq, collapse, amp_end, why)
-    if wb is not None and -wb[0] / hover_induced_m_s < -WINDMILL_BRAKE_RATIO:
+            outcome = "bounded-oscillation"
+        v = Verdict(kind, growth, freq, collapse, amp_end, why, outcome)
+        if outcome == "bounded-oscillation":
+            v.limit_cycle = _limit_cycle(h, cols, d, perturbation_scale, axial)
+        return v
+    if oscill and _sustained(t, e, window, amp_start):
+        lc = _limit_cycle(h, cols, d, perturbation_scale, axial)
+        return Verdict("flutter", growth, freq, None, amp_end,
+                       f"bounded oscillation (limit cycle) at {freq:.1f} Hz: neither decaying nor growing at the end "
+                       f"(twist +/-{lc['twist_deg']:.2f} deg, teeter +/-{lc['teeter_deg']:.2f} deg, rotor speed "
+                       f"+/-{lc['omega_rad_s']:.3f} rad/s)", "bounded-oscillation", lc)
+    if trimmed and branch == "overspeed":
+        x = "" if not hover_induced_m_s else f" = {h[0, cols['descent_rate_m_s']] / hover_induced_m_s:.2f} v_h"
+        return Verdict("overspeed", growth, freq, None, amp_end,
+                       f"the run starts on the normal branch overspeeding (rotor speed {omega_ref:.1f} rad/s, above the "
+                       f"branch's start, descent rate {h[0, cols['descent_rate_m_s']]:.1f} m/s{x}), and "
+                       + "the perturbation does not grow there")
+    wb_start = branch == "windmill-brake" if branch is not None else (
+        wb is not None and -wb[0] / hover_induced_m_s < -WINDMILL_BRAKE_RATIO)
+    if trimmed and wb_start:
+        vd_end = float(np.mean(h[t >= t[-1] - window, cols["descent_rate_m_s"]]))
         return Verdict("windmill-brake", growth, freq, None, amp_end,
                        f"the perturbation decays, but about an equilibrium on the windmill-brake side: descent "
-                       f"rate {wb[1]:.1f} m/s = {wb[2]:.1f} v_h (beyond the turbulent-wake region, V_c/v_h < "
-                       f"-{WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
-    return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays")
+                       f"rate {vd_end:.1f} m/s = {vd_end / (hover_induced_m_s or float('nan')):.1f} v_h (beyond the "
+                       f"turbulent-wake region, V_c/v_h < -{WINDMILL_BRAKE_RATIO:g}): not normal autorotation")
+    ser = _envelope_series(t[:end], e[:end], window)
+    tc = ser[0] if ser is not None else np.array([t[0], t[-1]])
+    n = len(tc)
+    fit_s = float(tc[-1] - tc[n // 3] + window) if n else 0.0
+    cycles = fit_s * freq if oscill else None
+    if fit_s < STABLE_MIN_FIT_S or (cycles is not None and cycles < STABLE_MIN_CYCLES):
+        return Verdict("undetermined", growth, freq, None, amp_end,
+                       f"undetermined (run too short): the perturbation seems to decay ({growth:+.2f} 1/s) over "
+                       f"{fit_s:.2g} s" + (f" ({cycles:.1f} cycles at {freq:.1f} Hz)" if cycles is not None else "")
+                       + f", but a stable verdict needs at least {STABLE_MIN_FIT_S:.2g} s and {STABLE_MIN_CYCLES} cycles "
+                       f"of the dominant motion in the fitted last two thirds: run about "
+                       f"{1.5 * STABLE_MIN_FIT_S:.0f} s or longer")
+    return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays", "decays")
 
 
 def judge_after_change(history: np.ndarray, columns, change_row: int, change: str, omega_ref: float, axial: bool,

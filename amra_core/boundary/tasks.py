@@ -2,7 +2,7 @@
 column walk, and the worker entry point :func:`compute_column` (never raises)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Optional
 
 import numpy as np
@@ -65,8 +65,9 @@ def cells_of_walk(cg: float, points: list, top_omega: Optional[float] = None) ->
     verdict (:data:`amra_core.verdict.VERDICTS`) so a cell and ``amra simulate`` of it can agree:
     a windmill-brake root below a fold is ``no-autorotation`` (a run started there from the branch
     end descends into that state; the cell keeps ``branch`` and ``boundary_kind`` windmill-brake),
-    the normal branch overspeeding is ``overspeed``."""
-    from ..stability import cell_from_modes
+    the normal branch overspeeding is ``overspeed`` unless a mode grows there (then ``flutter`` or
+    ``divergence``, as a run from it would say first)."""
+    from ..stability import UNSTABLE_REAL_PART, cell_from_modes
     pts = sorted(points, key=lambda p: p.gj_nm2)
     on_branch = ("normal", "overspeed")
     if top_omega is None:
@@ -77,6 +78,9 @@ def cells_of_walk(cg: float, points: list, top_omega: Optional[float] = None) ->
         kind = p.kind
         if kind in ("stable", "flutter"):
             c = cell_from_modes(cg, p.gj_nm2, p.trim, p.modes)
+        elif kind == "overspeed" and p.modes and not all(m.real_part_per_s < UNSTABLE_REAL_PART for m in p.modes):
+            c = replace(cell_from_modes(cg, p.gj_nm2, p.trim, p.modes), branch="overspeed")  # growing: flutter first
+            c = replace(c, reason=f"{c.reason} on the overspeeding branch: {p.reason}")
         elif kind == "overspeed":
             crit = p.critical
             c = CellResult(cg, p.gj_nm2, "overspeed", False, "overspeed",

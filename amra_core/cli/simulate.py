@@ -19,7 +19,8 @@ def cmd_simulate(args):
     from ..trim import trim
     tr = trim(compile_model(case.rotor, case.flight, case.settings))
     if not tr.ok and tr.state is None:  # not even a branch end to start from: the verdict is the trim's
-        out = {"verdict": "no-autorotation", "growth_rate_per_s": None, "frequency_hz": None,
+        out = {"verdict": "no-autorotation", "rotor_speed": "rotor speed not kept: no trimmed state to start from",
+               "outcome": "undetermined", "limit_cycle": None, "growth_rate_per_s": None, "frequency_hz": None,
                "collapse_time_s": None, "explanation": tr.reason or "no trimmed state to start from",
                "run_status": "not-started", "start": "not started: no trimmed state, not even a branch end",
                "trim": tr.to_dict(), "sim_time_s": 0.0, "wall_time_s": time.perf_counter() - t0,
@@ -44,7 +45,8 @@ def cmd_simulate(args):
     from ..simulation import COL
     last = h[h[:, 0] >= h[-1, 0] - 2 * math.pi / max(h[-1, COL["omega_rad_s"]], 1e-3)]
     out = {
-        "verdict": v.verdict, "growth_rate_per_s": v.growth_rate_per_s, "frequency_hz": v.frequency_hz,
+        "rotor_speed": v.rotor_speed, "verdict": v.verdict, "outcome": v.outcome, "limit_cycle": v.limit_cycle,
+        "growth_rate_per_s": v.growth_rate_per_s, "frequency_hz": v.frequency_hz,
         "collapse_time_s": v.collapse_time_s, "explanation": v.explanation,
         "omega_trim_rad_s": sim.trim.omega_rad_s if sim.trim.ok else None,
         "descent_rate_trim_m_s": sim.trim.descent_rate_m_s if sim.trim.ok else None,

@@ -1,0 +1,89 @@
+"""A run's verdict carries its outcome and the rotor-speed headline, and a short run is never
+"stable" (issue 21 §1, §7): synthetic histories whose answer is known by construction."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from amra_core.kernels import HISTORY_COLUMNS
+from amra_core.verdict import OUTCOMES, STABLE_MIN_FIT_S, judge
+
+C = {c: i for i, c in enumerate(HISTORY_COLUMNS)}
+V_H = 5.6
+OM0 = 40.0
+
+
+def history(teeter, omega=lambda t: OM0 + 0 * t, t_end=20.0, dt=0.0025, hz=12.0):
+    """Rows with rotor speed omega(t), descent 10 m/s and a teeter oscillation of ``hz`` whose
+    amplitude is teeter(t) [rad]."""
+    t = np.arange(0.0, t_end, dt)
+    om = omega(t)
+    h = np.zeros((len(t), len(HISTORY_COLUMNS)))
+    h[:, C["t_s"]] = t
+    h[:, C["omega_rad_s"]] = om
+    h[:, C["azimuth_rad"]] = np.concatenate([[0.0], np.cumsum(0.5 * (om[1:] + om[:-1]) * dt)])
+    h[:, C["descent_rate_m_s"]] = 10.0
+    h[:, C["teeter_rad"]] = teeter(t) * np.sin(2 * math.pi * hz * t)
+    return h
+
+
+def run_judge(h, trimmed=True, branch="normal"):
+    return judge(h, HISTORY_COLUMNS, OM0, True, "finished", trimmed, h[0].copy(), 0.01, hover_induced_m_s=V_H,
+                 branch=branch)
+
+
+def test_decaying_run_is_stable_and_decays():
+    v = run_judge(history(lambda t: 0.01 * np.exp(-0.3 * t)))
+    assert v.verdict == "stable" and v.outcome == "decays"
+    assert v.rotor_speed.startswith("rotor speed kept") and "40.0 rad/s" in v.rotor_speed
+
+
+def test_saturating_oscillation_is_a_bounded_flutter_with_its_amplitudes():
+    """Grows at +2 1/s from 1e-4 rad, levels off at 0.005 rad (below the 0.01 rad kick scale):
+    the old fit over the last two thirds saw a flat envelope and said "stable"."""
+    v = run_judge(history(lambda t: np.minimum(1e-4 * np.exp(2.0 * t), 0.005)))
+    assert v.verdict == "flutter" and v.outcome == "bounded-oscillation", v
+    lc = v.limit_cycle
+    assert math.isclose(lc["teeter_deg"], math.degrees(0.005), rel_tol=0.02), lc
+    assert lc["omega_rad_s"] == 0.0 and v.frequency_hz == pytest_approx(12.0, 0.05)
+
+
+def pytest_approx(x, rel):
+    import pytest
+    return pytest.approx(x, rel=rel)
+
+
+def test_growing_oscillation_is_a_runaway():
+    v = run_judge(history(lambda t: 1e-4 * np.exp(0.3 * t)))
+    assert v.verdict == "flutter" and v.outcome == "runaway" and v.growth_rate_per_s > 0.2
+
+
+def test_rotor_speed_collapse_is_the_headline_with_its_time():
+    om = lambda t: OM0 * np.exp(-0.2 * t)  # noqa: E731 - below 50 % at ln 2 / 0.2 = 3.47 s
+    v = run_judge(history(lambda t: 0.01 * np.exp(0.2 * t), omega=om), trimmed=False)
+    assert v.outcome == "rotor-speed-collapse" and abs(v.collapse_time_s - math.log(2) / 0.2) < 0.01
+    assert v.rotor_speed.startswith("rotor speed LOST") and "3.4" in v.rotor_speed
+    # no equilibrium: the verdict names the cause (an oscillation on the way is told in the explanation)
+    assert v.verdict == "no-autorotation"
+
+
+def test_short_run_that_seems_to_decay_is_undetermined():
+    """The measured case: a 0.5 s run fitted -4.4 1/s and said "stable (final)"."""
+    for t_end in (0.5, 2.0, 0.9 * 1.5 * STABLE_MIN_FIT_S):
+        v = run_judge(history(lambda t: 0.01 * np.exp(-0.5 * t), t_end=t_end))
+        assert v.verdict == "undetermined" and "run too short" in v.explanation, (t_end, v)
+        assert v.outcome == "undetermined"
+    v = run_judge(history(lambda t: 0.01 * np.exp(-0.5 * t), t_end=1.6 * STABLE_MIN_FIT_S))
+    assert v.verdict == "stable"
+
+
+def test_overspeed_start_is_named_and_decays():
+    v = run_judge(history(lambda t: 0.01 * np.exp(-0.3 * t)), branch="overspeed")
+    assert v.verdict == "overspeed" and v.outcome == "decays" and "overspeeding" in v.rotor_speed
+
+
+def test_every_outcome_is_from_the_vocabulary():
+    for h in (history(lambda t: 0.01 * np.exp(-0.3 * t)), history(lambda t: 1e-4 * np.exp(0.3 * t)),
+              history(lambda t: 0.01 + 0 * t, t_end=0.5)):
+        assert run_judge(h).outcome in OUTCOMES
