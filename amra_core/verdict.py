@@ -187,6 +187,16 @@ def _limit_cycle(h, cols, d, scale, axial) -> dict:
             "omega_rad_s": float(0.5 * np.ptp(om)) if len(om) else None}
 
 
+def oscillation_amplitudes(history: np.ndarray, columns, omega_ref: float, axial: bool, ref_row: np.ndarray,
+                           perturbation_scale: float = 0.01) -> dict:
+    """Half peak-to-peak over the last third of a run (as :attr:`Verdict.limit_cycle`): tip twist of
+    blade 0 and teeter [deg], rotor speed [rad/s] (forward flight: of the change over one revolution,
+    halved), whether the motion has settled, grows or collapsed."""
+    cols = {c: i for i, c in enumerate(columns)}
+    _, d = _deviation(history, cols, axial, omega_ref, ref_row, perturbation_scale)
+    return _limit_cycle(history, cols, d, perturbation_scale, axial)
+
+
 def _headline(v: "Verdict", t, om, omega_ref: float) -> str:
     if v.verdict == "numerical-failure":
         return f"rotor speed unknown: the run failed numerically at t = {float(t[-1]):.2f} s"

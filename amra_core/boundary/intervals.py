@@ -13,8 +13,12 @@ interval says which mode, :func:`amra_core.column.instability`), ``fold`` (no no
   ``gj_max``); weak windows are reported but never move it.
 
 **Strength.** A flutter interval is ``weak`` when its most unstable oscillating mode has a damping
-ratio above ``-weak_damping`` (and nothing non-oscillatory grows), else ``strong``. A monotonic
-(non-oscillating) growth is always strong, except in a fold approach.
+ratio above ``-weak_damping`` (and nothing non-oscillatory grows) *and* a 20 s run from its most
+unstable point with the default kick keeps its rotor speed and stays within ``weak_amplitude_deg``
+of twist and teeter (:func:`amra_core.boundary.tasks.interval_outcomes`); else ``strong``. A
+monotonic (non-oscillating) growth is always strong, except in a fold approach. Both conditions are
+needed: the damping ratio alone does not tell what an instability leads to (see
+:data:`WEAK_DAMPING`).
 
 **Fold approach.** A flutter interval directly above a ``fold`` interval in which no blade mode
 (teeter, flap, torsion, lag) oscillates strongly is the fold's own approach (at the fold a real eigenvalue of the rotor speed / inflow /
@@ -22,38 +26,54 @@ descent equilibrium passes through zero; measured, rigid axial EA 0.32 CG 0.36: 
 the branch end at 273, a 0.23 Hz inflow mode at +0.15 1/s and a 3.9 Hz teeter mode at damping ratio
 -0.0035): it is merged into the fold (``fold_approach: true``) and moves ``fold_gj`` to its top.
 
-**The default threshold** :data:`WEAK_DAMPING` = 0.02 (see its comment for the evidence).
+**The default thresholds** :data:`WEAK_DAMPING` = 0.02 and :data:`WEAK_AMPLITUDE_DEG` = 1 deg (see
+their comments for the evidence).
 """
 from __future__ import annotations
 
 import math
 from typing import Optional
 
-#: Flutter intervals whose most unstable oscillating mode has a damping ratio above -WEAK_DAMPING
-#: are "weak". Evidence (paper-boundary, EA 0.32, theodorsen; 20 s runs from the default kick):
-#: rigid axial CG 0.40, GJ 628-662: peak +1.06 1/s, damping ratio -0.012 at 12-14 Hz; from the
-#: default kick the twist oscillation levels off at +/-0.38 deg (teeter +/-0.13 deg), below twice
-#: the kick (0.29 deg), its growth visible only from a 1e-5 rad kick. Rigid axial CG 0.36, GJ
-#: 438-485: peak +5.1 1/s, damping ratio -0.072 at 11 Hz, settles at +/-0.84 deg twist within 2 s.
-#: Quasi-steady aerodynamics at CG 0.40 GJ 660: +17 1/s (damping ratio about -0.2). A damping ratio
-#: of -0.02 at the 11-14 Hz torsion modes is a growth of 1.4-1.8 1/s: an amplitude that doubles in
-#: under half a second is not a marginal effect, whereas the windows the audit called marginal sit at
-#: -0.01 to -0.013. The map's intervals (see the validation report) fall on either side of it.
+#: Flutter intervals whose most unstable oscillating mode has a damping ratio above -WEAK_DAMPING may be
+#: weak (if their run stays small, WEAK_AMPLITUDE_DEG). Evidence, paper-boundary EA 0.32, theodorsen,
+#: axial, CG 0.24-0.50 (2 % maps): the peak damping ratios of the flutter intervals fall in two groups,
+#: -0.0004, -0.002, -0.006, -0.013, -0.016, -0.017 and -0.025, -0.039, -0.049, -0.050, -0.054 ... -0.39,
+#: with the gap between -0.017 and -0.025; 0.02 lies in it. A damping ratio of -0.02 at the 11-14 Hz
+#: torsion modes is a growth of 1.4-1.8 1/s.
 WEAK_DAMPING = 0.02
+#: ...and a weak window's 20 s run from the default kick (0.29 deg twist, 0.57 deg teeter) stays within
+#: this many degrees of twist and teeter [deg]. Evidence (the same maps, half peak-to-peak over the last
+#: third of the run): rigid CG 0.40 GJ 645 (damping ratio -0.013, 12 Hz torsion): 0.38 / 0.13 deg, the
+#: audit's marginal window; but rigid CG 0.30 GJ 690 (-0.006, 20 Hz flap): 10 / 17 deg with the rotor
+#: speed swinging +/-4 rad/s, and fem-coupled CG 0.30 GJ 320 (-0.016, 12.6 Hz torsion): 7 / 3 deg.
+#: Strong windows saturate anywhere from 0.6 deg (rigid CG 0.38 GJ 555, -0.049) to 12 / 15 deg (rigid
+#: CG 0.28 GJ 618, -0.025): the damping ratio does not predict the size of the limit cycle, the run does.
+WEAK_AMPLITUDE_DEG = 1.0
 
 NO_AUTOROTATION = ("fold", "overspeed", "windmill-brake")
 
 
-def strength_of(iv: dict, weak_damping: float = WEAK_DAMPING) -> str:
+def _run_small(iv: dict, weak_amplitude_deg: float) -> bool:
+    """True if the interval's run (:func:`amra_core.boundary.tasks.interval_outcomes`) kept its rotor
+    speed and stayed within ``weak_amplitude_deg`` of twist and teeter; True without a run."""
+    if "run_outcome" not in iv:
+        return True
+    amp = iv.get("run_amplitude") or {}
+    if iv["run_outcome"] == "rotor-speed-collapse" or iv.get("run_verdict") in ("no-autorotation", "numerical-failure"):
+        return False
+    return all(amp.get(k) is not None and amp[k] < weak_amplitude_deg for k in ("twist_deg", "teeter_deg"))
+
+
+def strength_of(iv: dict, weak_damping: float = WEAK_DAMPING, weak_amplitude_deg: float = WEAK_AMPLITUDE_DEG) -> str:
     """``weak`` | ``strong`` of a flutter interval (module docstring). Intervals without mode data
     (judged by time marching) are ``strong``: nothing says they are marginal."""
     osc, mono = iv.get("oscillatory"), iv.get("monotonic_growth_rate_1_s")
     if osc is None and mono is None:
-        return "strong" if iv.get("peak_growth_rate_1_s") is None or iv.get("damping_ratio") is None \
-            or -iv["damping_ratio"] >= weak_damping else "weak"
-    if mono is not None:
-        return "strong"
-    return "strong" if -osc["damping_ratio"] >= weak_damping else "weak"
+        weak = iv.get("peak_growth_rate_1_s") is not None and iv.get("damping_ratio") is not None \
+            and -iv["damping_ratio"] < weak_damping
+    else:
+        weak = mono is None and -osc["damping_ratio"] < weak_damping
+    return "weak" if weak and _run_small(iv, weak_amplitude_deg) else "strong"
 
 
 def _fold_approach_modes(iv: dict, weak_damping: float) -> bool:
@@ -66,7 +86,8 @@ def _fold_approach_modes(iv: dict, weak_damping: float) -> bool:
     return blade is None or -blade["damping_ratio"] < weak_damping
 
 
-def classify(intervals: list, gj_max: float, weak_damping: float = WEAK_DAMPING) -> dict:
+def classify(intervals: list, gj_max: float, weak_damping: float = WEAK_DAMPING,
+             weak_amplitude_deg: float = WEAK_AMPLITUDE_DEG) -> dict:
     """Per column (module docstring): ``intervals`` (copies, ascending, each flutter interval with
     ``strength`` and ``fold_approach``), ``fold_gj``, ``branch_end_gj`` (top of the highest
     no-autorotation interval before merging), ``flutter_gj``, ``critical_gj``, ``kind`` (which one
@@ -78,7 +99,7 @@ def classify(intervals: list, gj_max: float, weak_damping: float = WEAK_DAMPING)
         below = ivs[i - 1] if i > 0 else None
         iv["fold_approach"] = bool(below is not None and (below["kind"] == "fold" or below.get("fold_approach"))
                                    and _fold_approach_modes(iv, weak_damping))
-        iv["strength"] = strength_of(iv, weak_damping) if not iv["fold_approach"] else "weak"
+        iv["strength"] = strength_of(iv, weak_damping, weak_amplitude_deg) if not iv["fold_approach"] else "weak"
 
     def above(i: int) -> Optional[float]:
         """The lowest computed GJ above interval i (None at the top of the range)."""

@@ -68,9 +68,11 @@ class BoundaryMap:
             "flutter_gj": [[c["cg"], fin(c.get("flutter_gj"))] for c in self.columns],
             "critical_gj_definition": "the larger of fold_gj (no normal autorotation below; the lowest computed GJ "
                                       "above it) and flutter_gj (the lowest computed GJ above the highest strong "
-                                      "flutter interval); weak flutter windows (damping ratio above -weak_damping) "
+                                      "flutter interval); weak flutter windows (damping ratio above -weak_damping and a 20 s run "
+                                      "within weak_amplitude_deg of twist and teeter) "
                                       "never move it; null: see columns[].status",
             "weak_damping": self.spec.weak_damping,
+            "weak_amplitude_deg": self.spec.weak_amplitude_deg,
             "columns": [{**c, "critical_gj": fin(c["critical_gj"]), "fold_gj": fin(c.get("fold_gj")),
                          "flutter_gj": fin(c.get("flutter_gj")), "branch_end_gj": fin(c.get("branch_end_gj"))}
                         for c in self.columns],
@@ -124,9 +126,10 @@ def _summarise(spec: MapSpec, by_col: dict, info: dict) -> tuple[list, list]:
             boundaries.append({"cg": cg, "kind": kind, "gj_lo": lo.gj_nm2, "gj_hi": hi.gj_nm2,
                                "gj": math.sqrt(lo.gj_nm2 * hi.gj_nm2), "below": lo.verdict, "above": hi.verdict,
                                "resolved": hi.gj_nm2 / lo.gj_nm2 <= tol and kind != "unknown"})
-        c = classify(col.get("intervals", []), spec.gj_max, spec.weak_damping)
+        c = classify(col.get("intervals", []), spec.gj_max, spec.weak_damping, spec.weak_amplitude_deg)
         base = {"cg": cg, "fold_gj": c["fold_gj"], "flutter_gj": c["flutter_gj"], "branch_end_gj": c["branch_end_gj"],
-                "weak_damping": spec.weak_damping, "intervals": c["intervals"]}
+                "weak_damping": spec.weak_damping, "weak_amplitude_deg": spec.weak_amplitude_deg,
+                "intervals": c["intervals"]}
         if col.get("failed") or col.get("cancelled"):
             columns.append({**base, "critical_gj": None, "bracket": None,
                             "status": "incomplete" if col.get("cancelled") else "unresolved", "kind": None})

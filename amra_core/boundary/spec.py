@@ -21,7 +21,7 @@ from ..flight import AERO_MODELS, FlightCondition, SolverSettings
 from ..rotor import Rotor
 from ..shapes import FIDELITIES
 from ..verdict import VERDICTS as RUN_VERDICTS
-from .intervals import WEAK_DAMPING
+from .intervals import WEAK_AMPLITUDE_DEG, WEAK_DAMPING
 
 #: a map cell's verdict: a run's verdict word (one vocabulary, :data:`amra_core.verdict.VERDICTS`), or
 #: ``failed`` (a numerical failure or a crashed worker: no physics verdict)
@@ -82,7 +82,8 @@ class MapSpec:
     or ``time`` (the walk's points judged by time marching from their trim plus a perturbation);
     ``n_elements``: FEM elements per blade; ``weak_damping``: a flutter interval whose most unstable
     oscillating mode has a damping ratio above ``-weak_damping`` is weak (reported, never the
-    critical GJ; :data:`~amra_core.boundary.intervals.WEAK_DAMPING` says why 0.02) [-].
+    critical GJ) [-], if also its run stays within ``weak_amplitude_deg`` of twist and teeter [deg]
+    (:mod:`amra_core.boundary.intervals` says why 0.02 and 1 deg).
     """
 
     rotor: Union[str, Rotor] = "paper-boundary"
@@ -98,6 +99,7 @@ class MapSpec:
     method: str = "eigen"
     n_elements: int = 10
     weak_damping: float = WEAK_DAMPING
+    weak_amplitude_deg: float = WEAK_AMPLITUDE_DEG
 
     def __post_init__(self):
         if not isinstance(self.rotor, (str, Rotor)):
@@ -125,6 +127,7 @@ class MapSpec:
         if isinstance(self.n_coarse, bool) or not isinstance(self.n_coarse, int) or not 2 <= self.n_coarse <= 200:
             raise MapSpecError(f"n_coarse = {self.n_coarse!r} is not allowed: must be an integer in [2, 200]")
         _num("weak_damping", self.weak_damping, 0.0, 1.0)
+        _num("weak_amplitude_deg", self.weak_amplitude_deg, 0.0, 90.0)
         if isinstance(self.n_elements, bool) or not isinstance(self.n_elements, int) or not 1 <= self.n_elements <= 60:
             raise MapSpecError(f"n_elements = {self.n_elements!r} is not allowed: must be an integer in [1, 60]")
 

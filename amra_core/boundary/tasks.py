@@ -119,6 +119,39 @@ def _time_cells(task: ColumnTask, points: list, cells: list) -> list:
     return out
 
 
+#: simulated time [s] of the run that measures what a flutter interval's instability leads to
+OUTCOME_RUN_S = 20.0
+
+
+def interval_outcomes(task: ColumnTask, points: list, intervals: list, cancel=None) -> None:
+    """For every flutter interval: a run from the trim of its most unstable point (the default kick,
+    ``OUTCOME_RUN_S``) says what the instability leads to (issue 21 §1): ``run_outcome`` (decays,
+    bounded-oscillation, rotor-speed-collapse, runaway), ``run_verdict`` and ``run_amplitude``
+    (half peak-to-peak over the run's last third: twist and teeter [deg], rotor speed [rad/s]).
+    Written into the interval dicts; a failed run leaves them out (the strength then follows the
+    damping ratio alone)."""
+    from ..simulation import HISTORY_COLUMNS, Case, Simulation
+    from ..verdict import oscillation_amplitudes
+    for iv in intervals:
+        if iv["kind"] != "flutter" or (cancel is not None and cancel.is_set()):
+            continue
+        inside = [p for p in points if p.kind == "flutter" and p.trim is not None
+                  and iv.get("gj_lo_point_nm2", iv["gj_lo_nm2"]) <= p.gj_nm2 <= iv.get("gj_hi_point_nm2", iv["gj_hi_nm2"])]
+        if not inside:
+            continue
+        p = max(inside, key=lambda q: q.max_real_part_per_s)
+        try:
+            rotor = task.rotor.with_overrides(gj_nm2=p.gj_nm2, x_cg=task.cg)
+            sim = Simulation(Case(rotor, task.flight, task.settings, t_end_s=OUTCOME_RUN_S), trim_result=p.trim).run()
+            v = sim.verdict()
+            amp = oscillation_amplitudes(sim.history, HISTORY_COLUMNS, sim.omega_ref, task.flight.is_axial,
+                                         sim.reference_row, max(abs(sim.case.perturbation.teeter_rad),
+                                                                abs(sim.case.perturbation.twist_rad)))
+        except Exception:  # noqa: BLE001 - the interval keeps its eigen classification
+            continue
+        iv.update({"run_gj_nm2": p.gj_nm2, "run_verdict": v.verdict, "run_outcome": v.outcome, "run_amplitude": amp})
+
+
 def compute_column(task: ColumnTask, on_point=None, cancel=None) -> ColumnResult:
     """Worker entry point: walk one column; an exception becomes a ``failed`` column (never raises)."""
     from ..column import walk_column
@@ -132,6 +165,9 @@ def compute_column(task: ColumnTask, on_point=None, cancel=None) -> ColumnResult
                 cells = _time_cells(task, w.points, cells)
         intervals = w.intervals
         crit = w.critical_gj_nm2
+        if task.method != "time" and not w.cancelled:
+            with np.errstate(all="ignore"):
+                interval_outcomes(task, w.points, intervals, cancel)
         if task.method == "time":
             intervals, crit = _summary_of_cells(cells, task)
         return ColumnResult(task.cg, cells, intervals, crit, w.fold_gj_nm2, w.n_trims, w.wall_time_s,

@@ -2,7 +2,7 @@
 
     amra boundary --preset paper-boundary --fidelity rigid --mu 0 --ea 0.32 \\
         [--cg 0.20:0.50:16] [--gj 30:3000] [--aero theodorsen] [--method eigen|time] \\
-        [--weak-damping 0.02] [--workers N] [--scheduler ADDR] [--store FILE] [--out map.csv] [--plot map.png] [--json] [--quiet]
+        [--weak-damping 0.02] [--weak-amplitude 1] [--workers N] [--scheduler ADDR] [--store FILE] [--out map.csv] [--plot map.png] [--json] [--quiet]
 
 Prints per CG column the fold GJ (no normal autorotation below), the flutter GJ (top of the highest
 strong instability) and the critical GJ (the larger), with every interval of the column (stable,
@@ -27,7 +27,7 @@ import sys
 import threading
 import warnings
 
-from ..boundary.intervals import WEAK_DAMPING
+from ..boundary.intervals import WEAK_AMPLITUDE_DEG, WEAK_DAMPING
 from ..flight import AERO_MODELS
 from ..shapes import FIDELITIES
 from .common import dumps_strict, number, value_range
@@ -61,7 +61,11 @@ def register(sub) -> None:
     p.add_argument("--weak-damping", type=number("--weak-damping", 0.0, 1.0), default=WEAK_DAMPING,
                    help=f"flutter intervals whose most unstable oscillating mode has a damping ratio above minus "
                         f"this are weak: shown and exported, but they do not move the critical GJ "
-                        f"(default {WEAK_DAMPING:g}; 0: every instability is strong)")
+                        f"(default {WEAK_DAMPING:g}; 0: every instability is strong), if also a 20 s run from "
+                        f"the window stays within --weak-amplitude")
+    p.add_argument("--weak-amplitude", type=number("--weak-amplitude", 0.0, 90.0), default=WEAK_AMPLITUDE_DEG,
+                   help=f"largest twist and teeter amplitude [deg] of a weak window's 20 s run from the default kick "
+                        f"(default {WEAK_AMPLITUDE_DEG:g})")
     p.add_argument("--workers", type=number("--workers", 1, 512, integer=True),
                    help="local worker processes (default: the CPU count; 1 = in this process; "
                         "at most 4 per CPU core, more are capped with a message)")
@@ -94,7 +98,8 @@ def _spec(args):
         base.with_overrides(x_ea=args.ea, x_cg=cg)
     return MapSpec(rotor=rotor, fidelity=args.fidelity, aero=args.aero, mu=args.mu, ea=args.ea, cg_values=cgs,
                    gj_min=args.gj[0], gj_max=args.gj[1], gj_rel_tol=args.tol, n_coarse=args.coarse,
-                   method=args.method, n_elements=args.elements, weak_damping=args.weak_damping)
+                   method=args.method, n_elements=args.elements, weak_damping=args.weak_damping,
+                   weak_amplitude_deg=args.weak_amplitude)
 
 
 def _warn(msg: str) -> None:
@@ -211,7 +216,8 @@ def cmd_boundary(args) -> int:
               f"{bmap.cases} cells ({bmap.cached_cases} from store) in {bmap.wall_time_s:.2f} s"
               + (" -- interrupted, partial map" if bmap.cancelled else ""))
         print(f"GJ in N m^2/rad; fold: no normal autorotation below; flutter: top of the highest strong instability; "
-              f"critical: the larger; weak: damping ratio above -{spec.weak_damping:g}")
+              f"critical: the larger; weak: damping ratio above -{spec.weak_damping:g} and a 20 s run within "
+              f"{spec.weak_amplitude_deg:g} deg")
         print(f"{'CG [c]':>8s} {'fold GJ':>9s} {'flutter GJ':>11s} {'critical GJ':>12s} {'bracket':>22s}  status")
 
         def gjs(g):
@@ -228,6 +234,10 @@ def cmd_boundary(args) -> int:
                     if iv.get("peak_growth_rate_1_s") is not None:
                         line += (f": peak {iv['peak_growth_rate_1_s']:+.2f} 1/s, damping ratio {iv['damping_ratio']:+.4f},"
                                  f" {iv['frequency_hz']:.1f} Hz, {iv['mode']}")
+                    if iv.get("run_outcome"):
+                        a = iv.get("run_amplitude") or {}
+                        line += (f"; run at {iv['run_gj_nm2']:.0f}: {iv['run_outcome']}, twist +/-"
+                                 f"{a.get('twist_deg') or 0:.2f} deg, teeter +/-{a.get('teeter_deg') or 0:.2f} deg")
                 if not iv.get("resolved", True):
                     line += " (edge from the probe grid)"
                 print(" " * 10 + line)

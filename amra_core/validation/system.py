@@ -227,6 +227,21 @@ def _fmt(g):
     return "stable throughout" if g is None else ("unstable at GJ max" if not math.isfinite(g) else f"{g:.0f}")
 
 
+def _fmt_b(g):
+    return "none" if g is None else ("above GJ max" if not math.isfinite(g) else f"{g:.0f}")
+
+
+def _fmt_iv(iv) -> str:
+    out = f"{iv['kind']} {iv['gj_lo_nm2']:.0f}–{iv['gj_hi_nm2']:.0f}"
+    if iv["kind"] == "flutter":
+        out += " (" + ("fold approach" if iv.get("fold_approach") else iv.get("strength", "?"))
+        if iv.get("peak_growth_rate_1_s") is not None:
+            out += (f", {iv['peak_growth_rate_1_s']:+.2f} 1/s, ζ {iv['damping_ratio']:+.3f}, "
+                    f"{iv['frequency_hz']:.1f} Hz {iv['mode']}")
+        out += ")"
+    return out
+
+
 def _map_cases(sec, bm, fid, axial):
     tag = f"{fid}.{'axial' if axial else 'forward'}"
     crit = [(c, g) for c, g in bm.critical_gj]
@@ -234,15 +249,34 @@ def _map_cases(sec, bm, fid, axial):
             "Fig. 14 (shape only; the paper's numbers are not readable here)", SRC_FIGS,
             ", ".join(f"{c:.2f}: {_fmt(g)}" for c, g in crit), "CG: GJ [N m²/rad]", "reported", "info",
             f"{bm.cases} cells, {bm.wall_time_s:.0f} s; verdicts {bm.verdict_counts()}", details=bm.to_dict())
-    sec.add(f"boundary.intervals.{tag}", f"Every interval per CG column ({fid}, {'axial' if axial else f'forward μ = {MAP_MU}'})",
-            "issue 8 §2 (stable, flutter, fold, windmill-brake)", SRC_FIGS,
-            " | ".join(f"{col['cg']:.2f}: " + ", ".join(f"{iv['kind']} {iv['gj_lo_nm2']:.0f}–{iv['gj_hi_nm2']:.0f}"
-                                                      for iv in col.get("intervals", []))
+    flight = 'axial' if axial else f'forward μ = {MAP_MU}'
+    sec.add(f"boundary.fold-flutter.{tag}", f"Fold and strong-flutter GJ per CG column ({fid}, {flight})",
+            "issue 21 §2 (two boundaries per column)", SRC_FIGS,
+            " | ".join(f"{col['cg']:.2f}: fold {_fmt_b(col.get('fold_gj'))}, flutter {_fmt_b(col.get('flutter_gj'))}, "
+                       f"critical {_fmt(col['critical_gj'])}" for col in bm.columns), "GJ [N m²/rad]", "reported", "info",
+            f"fold: no normal autorotation below; flutter: top of the highest strong instability (damping ratio below "
+            f"-{bm.spec.weak_damping:g}); critical: the larger; weak windows are listed below but never move it",
+            details={"columns": [{k: col.get(k) for k in ("cg", "fold_gj", "flutter_gj", "critical_gj", "status")}
+                                 for col in bm.columns]})
+    sec.add(f"boundary.intervals.{tag}", f"Every interval per CG column, with its strength ({fid}, {flight})",
+            "issue 8 §2, issue 21 §2 (stable, flutter weak/strong, fold, overspeed, windmill-brake)", SRC_FIGS,
+            " | ".join(f"{col['cg']:.2f}: " + ", ".join(_fmt_iv(iv) for iv in col.get("intervals", []))
                        for col in bm.columns), "GJ [N m²/rad]", "reported", "info",
             "each column walked down its trim branch from GJ 3000 by continuation; every change of stability and the "
-            "fold bracketed to the map tolerance; below a fold, cold-start probes (axial) find windmill-brake "
-            "equilibria (V_c/v_h < -2.1: not autorotation, never stable); their edges come from the probe grid",
-            details={"columns": bm.columns})
+            "fold bracketed to the map tolerance; a flutter interval is strong or weak by the damping ratio of its most "
+            "unstable oscillating mode (peak growth rate [1/s], damping ratio, frequency and mode given), one directly "
+            "above the fold without a strong blade mode is the fold's approach (merged into it); below a fold, "
+            "cold-start probes (axial) find windmill-brake equilibria (not autorotation, never stable); their edges "
+            "come from the probe grid", details={"columns": bm.columns})
+    folds = [(col["cg"], col.get("fold_gj")) for col in bm.columns if col["cg"] >= 0.36 - 1e-9]
+    if len(folds) >= 2:
+        vals = [g for _, g in folds]
+        ok = all(g is not None and math.isfinite(g) for g in vals) and all(b > a for a, b in zip(vals, vals[1:]))
+        sec.check(f"boundary.fold-rises-aft.{tag}", f"Fold GJ rises with the CG from 0.36 aft ({fid}, {flight})",
+                  "rises (nose-up twist from the CG offset ends autorotation at a higher GJ)", SRC_FIGS,
+                  " → ".join(f"{c:.2f}: {_fmt_b(g)}" for c, g in folds), "N m²/rad", "strictly increasing", ok,
+                  "the fold is set by static twist: the total pitch reaching the root's stall ends the normal branch "
+                  "(model-notes §8)")
     cg, gj, label = PAPER_POINTS[(fid, axial)]
     g = _crit(bm, cg)
     if g is not None or any(abs(c - cg) < 1e-9 for c, _ in crit):

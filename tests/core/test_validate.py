@@ -96,3 +96,19 @@ def test_a_raising_case_is_recorded_as_error(tmp_path, monkeypatch):
     doc = json.loads((tmp_path / "results.json").read_text(encoding="utf-8"))
     assert any(c["status"] == "error" for c in doc["cases"])
     assert (tmp_path / "report.html").is_file()
+
+
+def test_report_lists_fold_and_flutter_per_column_with_every_interval_strength(quick_report):
+    """Issue 21: the validation report gives fold and strong-flutter GJ per column and the strength of
+    every flutter interval; the fold GJ rises from CG 0.36 aft."""
+    _, out = quick_report
+    doc = json.loads((out / "results.json").read_text(encoding="utf-8"))
+    by_id = {c["id"]: c for c in doc["cases"]}
+    ff = by_id["system.boundary.fold-flutter.rigid.axial"]
+    assert "fold" in ff["value"] and "flutter" in ff["value"] and "critical" in ff["value"]
+    cols = ff["details"]["columns"]
+    assert cols and all({"fold_gj", "flutter_gj", "critical_gj"} <= set(c) for c in cols)
+    iv = by_id["system.boundary.intervals.rigid.axial"]
+    flutter = [i for c in iv["details"]["columns"] for i in c["intervals"] if i["kind"] == "flutter"]
+    assert all(i["strength"] in ("weak", "strong") for i in flutter)
+    assert by_id["system.boundary.fold-rises-aft.rigid.axial"]["status"] == "pass"
