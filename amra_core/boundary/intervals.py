@@ -21,8 +21,9 @@ needed: the damping ratio alone does not tell what an instability leads to (see
 :data:`WEAK_DAMPING`).
 
 **Fold approach.** A flutter interval directly above a ``fold`` interval in which no blade mode
-(teeter, flap, torsion, lag) oscillates strongly is the fold's own approach (at the fold a real eigenvalue of the rotor speed / inflow /
-descent equilibrium passes through zero; measured, rigid axial EA 0.32 CG 0.36: GJ 270-281 above
+(teeter, flap, torsion, lag) oscillates with a damping ratio below ``-weak_damping`` is the fold's
+own approach (at the fold a real eigenvalue of the rotor speed / inflow / descent equilibrium
+passes through zero; measured, rigid axial EA 0.32 CG 0.36: GJ 270-281 above
 the branch end at 273, a 0.23 Hz inflow mode at +0.15 1/s and a 3.9 Hz teeter mode at damping ratio
 -0.0035): it is merged into the fold (``fold_approach: true``) and moves ``fold_gj`` to its top.
 
