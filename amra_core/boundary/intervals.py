@@ -21,8 +21,8 @@ needed: the damping ratio alone does not tell what an instability leads to (see
 :data:`WEAK_DAMPING`).
 
 **Fold approach.** A flutter interval directly above a ``fold`` interval in which no blade mode
-(teeter, flap, torsion, lag) oscillates with a damping ratio below ``-weak_damping`` is the fold's
-own approach (at the fold a real eigenvalue of the rotor speed / inflow / descent equilibrium
+(teeter, flap, torsion, lag) oscillates with a damping ratio below ``-weak_damping``, and whose run
+stays small (as for a weak window), is the fold's own approach (at the fold a real eigenvalue of the rotor speed / inflow / descent equilibrium
 passes through zero; measured, rigid axial EA 0.32 CG 0.36: GJ 270-281 above
 the branch end at 273, a 0.23 Hz inflow mode at +0.15 1/s and a 3.9 Hz teeter mode at damping ratio
 -0.0035): it is merged into the fold (``fold_approach: true``) and moves ``fold_gj`` to its top.
@@ -99,7 +99,7 @@ def classify(intervals: list, gj_max: float, weak_damping: float = WEAK_DAMPING,
             continue
         below = ivs[i - 1] if i > 0 else None
         iv["fold_approach"] = bool(below is not None and (below["kind"] == "fold" or below.get("fold_approach"))
-                                   and _fold_approach_modes(iv, weak_damping))
+                                   and _fold_approach_modes(iv, weak_damping) and _run_small(iv, weak_amplitude_deg))
         iv["strength"] = strength_of(iv, weak_damping, weak_amplitude_deg) if not iv["fold_approach"] else "weak"
 
     def above(i: int) -> Optional[float]:

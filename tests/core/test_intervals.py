@@ -63,6 +63,10 @@ def test_the_fold_approach_is_merged_into_the_fold():
     ivs[2] = iv("flutter", 270, 281, zeta=-0.1, mode="flap")
     c = classify(ivs, 3000)
     assert not c["intervals"][2]["fold_approach"] and c["flutter_gj"] == 281 * 1.005
+    # a weakly damped blade mode whose run grows large is not the fold's approach either
+    ivs[2] = iv("flutter", 270, 281, zeta=-0.016, mode="torsion", run=("bounded-oscillation", 7.0))
+    c = classify(ivs, 3000)
+    assert not c["intervals"][2]["fold_approach"] and c["intervals"][2]["strength"] == "strong"
 
 
 def test_overspeed_stretch_is_no_normal_autorotation_and_unstable_top_is_inf():
