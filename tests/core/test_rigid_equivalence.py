@@ -164,3 +164,23 @@ def test_rigid_spring_is_a_validated_setting_and_reaches_the_model():
     assert k["static"] == pytest.approx(torsion_spring_nm_rad(rot, "static"))
     weighted, _ = static_torsion_coefficients(rot.root_cutout_m / rot.radius_m)
     assert k["frequency"] / k["static"] == pytest.approx(K_TORSION_SPRING * weighted, rel=1e-4)  # 1.49
+
+
+def test_cli_rigid_spring_option(capsys):
+    """``--rigid-spring static`` reaches the model from the command line: the rigid blade's torsion
+    frequency at rest falls by the square root of the spring ratio (the torsion inertia is unchanged;
+    GJ 1e4 keeps the torsion mode far from the flap modes it couples with)."""
+    import json
+    from amra_core.cli import main
+    f = {}
+    for kind in ("frequency", "static"):
+        assert main(["modes", "--preset", "paper-boundary", "--gj", "10000", "--fidelity", "rigid",
+                     "--rigid-spring", kind, "--json"]) == 0
+        modes = json.loads(capsys.readouterr().out)["modes"]
+        f[kind] = next(m["frequency_hz"] for m in modes if m["label"] == "torsion 1 (collective)")
+    rot = load_preset("paper-boundary")
+    ratio = torsion_spring_nm_rad(rot, "frequency") / torsion_spring_nm_rad(rot, "static")
+    assert f["frequency"] / f["static"] == pytest.approx(math.sqrt(ratio), rel=0.01)
+    with pytest.raises(SystemExit) as ei:  # argparse names the choices and exits 2
+        main(["trim", "--rigid-spring", "soft"])
+    assert ei.value.code == 2 and "--rigid-spring" in capsys.readouterr().err
