@@ -75,7 +75,7 @@ def cmd_sensitivity(args):
 def register(sub) -> None:
     """Add the ``sensitivity`` sub-command to the ``amra`` parser's sub-parsers ``sub``."""
     from ..sensitivity import ESTIMATE_NAMES
-    p = sub.add_parser("sensitivity", help="change of the fold and flutter GJ when each estimate changes by +-10 %",
+    p = sub.add_parser("sensitivity", help="change of the fold and flutter GJ when each estimate changes by +-10 %%",
                        description="For each estimated rotor value (" + ", ".join(ESTIMATE_NAMES) + ") the CG "
                                    "column is walked again (the map's column walk) with the value changed by "
                                    "-STEP and +STEP; prints the fold GJ and flutter GJ and their changes.")
