@@ -7,7 +7,7 @@ from typing import Optional
 import numpy as np
 
 from .rotor import _check_number
-from .shapes import FIDELITIES
+from .shapes import FIDELITIES, TORSION_SPRINGS
 
 AERO_MODELS = ("quasi-steady", "theodorsen")
 INFLOW_MODELS = ("uniform", "three-state")
@@ -77,7 +77,11 @@ class SolverSettings:
     ``n_elements``: FEM elements per blade; ``n_stations``: aerodynamic (Gauss) stations per blade;
     ``dt_s``: time step [s] (``None``: chosen from the stiffest mode, see :mod:`amra_core.model`);
     ``max_mode_hz``: FEM levels keep the structural modes below this frequency [Hz] at the
-    reference rotor speed (Ritz reduction; ``None`` keeps every FEM coordinate).
+    reference rotor speed (Ritz reduction; ``None`` keeps every FEM coordinate);
+    ``rigid_spring``: the ``rigid`` level's root torsion spring, ``frequency`` (``(pi/2)^2 GJ/L``,
+    the first torsion frequency of the uniform cantilever; default) | ``static`` (the same
+    load-weighted static twist under an ``r^2`` moment, about 1.6 x softer), see
+    :mod:`amra_core.rigid_equivalence`; the FEM levels ignore it.
     """
 
     fidelity: str = "rigid"
@@ -87,6 +91,7 @@ class SolverSettings:
     n_stations: int = 12
     dt_s: Optional[float] = None
     max_mode_hz: Optional[float] = 200.0
+    rigid_spring: str = "frequency"
 
     def __post_init__(self):
         if self.fidelity not in FIDELITIES:
@@ -95,6 +100,9 @@ class SolverSettings:
             raise SettingsError(f"aero = {self.aero!r} is not allowed: choose one of {', '.join(AERO_MODELS)}")
         if self.inflow not in INFLOW_MODELS:
             raise SettingsError(f"inflow = {self.inflow!r} is not allowed: choose one of {', '.join(INFLOW_MODELS)}")
+        if self.rigid_spring not in TORSION_SPRINGS:
+            raise SettingsError(f"rigid_spring = {self.rigid_spring!r} is not allowed: choose one of "
+                                f"{', '.join(TORSION_SPRINGS)}")
         _integer(self, "n_elements", "elements", 1, 60)
         _integer(self, "n_stations", "stations", 4, 60)
         if self.dt_s is not None:

@@ -198,7 +198,8 @@ def _gj_free_parts(rotor: Rotor, flight: FlightCondition, settings: SolverSettin
     """The GJ-independent parts of a compiled model, for a rotor whose GJ does not matter (the
     caller passes it with GJ 1). Measured on a rigid axial column walk (paper-boundary, 40 trims):
     the structure assembly and the airfoil resampling were 43 % of the walk's time."""
-    mesh = make_mesh(settings.fidelity, rotor.root_cutout_m, rotor.radius_m, settings.n_elements)
+    mesh = make_mesh(settings.fidelity, rotor.root_cutout_m, rotor.radius_m, settings.n_elements,
+                     settings.rigid_spring)
     rho = flight.density_kg_m3
     s = assemble(rotor, mesh, added_mass=None if vacuum else apparent_mass(rotor, rho), torsion=False)
     st_ = rotor.stations

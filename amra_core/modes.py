@@ -120,7 +120,7 @@ def _symmetry_basis(kinds, blade_of):
 
 
 def solve_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
-                omega_rad_s: float = 0.0) -> ModalSolution:
+                omega_rad_s: float = 0.0, rigid_spring: str = "frequency") -> ModalSolution:
     """Solve the held-speed in-vacuo eigenproblem (lower-level companion of :func:`natural_modes`).
 
     Parameters
@@ -133,6 +133,8 @@ def solve_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
         Finite elements per blade (integration breakpoints only at the ``rigid`` level).
     omega_rad_s : float
         Rotor speed Omega [rad/s].
+    rigid_spring : {"frequency", "static"}
+        Root torsion spring of the ``rigid`` level (:mod:`amra_core.rigid_equivalence`).
 
     Returns
     -------
@@ -144,7 +146,7 @@ def solve_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
     omega = float(omega_rad_s)
     if not np.isfinite(omega) or omega < 0.0:
         raise ValueError(f"omega_rad_s = {omega_rad_s!r} is not allowed: must be finite and >= 0")
-    mesh = make_mesh(fidelity, rotor.root_cutout_m, rotor.radius_m, n_elements)
+    mesh = make_mesh(fidelity, rotor.root_cutout_m, rotor.radius_m, n_elements, rigid_spring)
     s = assemble(rotor, mesh)
     M, K, K2, kinds, blade_of = _full_matrices(s, omega)
     Tc, Ts = _symmetry_basis(kinds, blade_of)
@@ -243,7 +245,7 @@ def _shape(sol: ModalSolution, j: int, n_points: int) -> dict:
 
 
 def natural_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
-                  omega_rad_s: float = 0.0) -> list:
+                  omega_rad_s: float = 0.0, rigid_spring: str = "frequency") -> list:
     """Natural modes of the in-vacuo rotor at a held rotor speed, sorted by frequency.
 
     Parameters
@@ -256,6 +258,8 @@ def natural_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
         Finite elements per blade.
     omega_rad_s : float
         Rotor speed Omega [rad/s], >= 0.
+    rigid_spring : {"frequency", "static"}
+        Root torsion spring of the ``rigid`` level.
 
     Returns
     -------
@@ -277,7 +281,7 @@ def natural_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
             that entry). Also ``symmetry``, ``energy`` (kinetic-energy fractions per kind) and
             ``vector`` (the mass-normalised eigenvector over ``[beta, q0, q1, zeta0, zeta1]``).
     """
-    sol = solve_modes(rotor, fidelity, n_elements, omega_rad_s)
+    sol = solve_modes(rotor, fidelity, n_elements, omega_rad_s, rigid_spring)
     f = _frequencies_hz(sol.eigenvalues)
     labels = mode_labels(sol)
     n_points = 4 * max(sol.structure.mesh.n_elements, 1) + 1
@@ -290,7 +294,7 @@ def natural_modes(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
 
 
 def modes_report(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
-                 omega_rad_s: float = 0.0, n_modes: int = _REPORT_MODES) -> dict:
+                 omega_rad_s: float = 0.0, n_modes: int = _REPORT_MODES, rigid_spring: str = "frequency") -> dict:
     """JSON-ready summary of :func:`natural_modes` (first ``n_modes`` modes, no shapes).
 
     Parameters
@@ -305,6 +309,8 @@ def modes_report(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
         Rotor speed [rad/s].
     n_modes : int
         Number of lowest modes to list (default 12).
+    rigid_spring : {"frequency", "static"}
+        Root torsion spring of the ``rigid`` level.
 
     Returns
     -------
@@ -313,7 +319,7 @@ def modes_report(rotor, fidelity: str = "fem-coupled", n_elements: int = 10,
         "frequency_hz" (rounded to 0.001 Hz), "per_rev" (4 decimals, or None)}, ...]}``.
     """
     rotor = _resolve_rotor(rotor)
-    modes = natural_modes(rotor, fidelity, n_elements, omega_rad_s)[:n_modes]
+    modes = natural_modes(rotor, fidelity, n_elements, omega_rad_s, rigid_spring)[:n_modes]
     return {
         "rotor": rotor.name,
         "fidelity": fidelity,

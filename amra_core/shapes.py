@@ -22,6 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 FIDELITIES = ("rigid", "fem-torsion", "fem-coupled")
+#: root torsion springs of the ``rigid`` level (:mod:`amra_core.rigid_equivalence`)
+TORSION_SPRINGS = ("frequency", "static")
 
 
 @dataclass(frozen=True)
@@ -36,6 +38,9 @@ class BladeMesh:
     nodes_m: tuple
     n_flap: int  #: number of flap coordinates
     n_torsion: int  #: number of torsion coordinates
+    #: root torsion spring of the ``rigid`` level: ``frequency`` | ``static``
+    #: (:mod:`amra_core.rigid_equivalence`)
+    torsion_spring: str = "frequency"
 
     @property
     def n_q(self) -> int:
@@ -111,15 +116,19 @@ def _hermite(r, nodes, pw, dpw, ddpw):
         ddpw[rows[m], c[m]] += ddN[k][m]
 
 
-def make_mesh(fidelity: str, root_m: float, tip_m: float, n_elements: int = 10) -> BladeMesh:
-    """Uniform mesh of ``n_elements`` from the root cut-out to the tip."""
+def make_mesh(fidelity: str, root_m: float, tip_m: float, n_elements: int = 10,
+              torsion_spring: str = "frequency") -> BladeMesh:
+    """Uniform mesh of ``n_elements`` from the root cut-out to the tip; ``torsion_spring``: the
+    ``rigid`` level's root torsion spring (``frequency`` or ``static``, ignored by the FEM levels)."""
+    if torsion_spring not in TORSION_SPRINGS:
+        raise ValueError(f"rigid_spring = {torsion_spring!r} is not allowed: choose one of {', '.join(TORSION_SPRINGS)}")
     if fidelity not in FIDELITIES:
         raise ValueError(f"fidelity = {fidelity!r} is not allowed: choose one of {', '.join(FIDELITIES)}")
     if not (isinstance(n_elements, int) and 1 <= n_elements <= 200):
         raise ValueError(f"elements = {n_elements!r} is not allowed: must be an integer in [1, 200]")
     nodes = tuple(np.linspace(root_m, tip_m, n_elements + 1))
     if fidelity == "rigid":
-        return BladeMesh(fidelity, nodes, 1, 1)
+        return BladeMesh(fidelity, nodes, 1, 1, torsion_spring)
     if fidelity == "fem-torsion":
         return BladeMesh(fidelity, nodes, 1, n_elements)
     return BladeMesh(fidelity, nodes, 2 * n_elements, n_elements)

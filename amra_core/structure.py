@@ -23,8 +23,11 @@ teeter angle ``beta`` shared by both blades (blade 0 displaced by ``+beta r``, b
 
 Equivalent root springs of the ``rigid`` level (model-notes §2), chosen so that the uniform rigid
 blade has the first non-rotating frequency of the uniform cantilever: torsion
-``k_theta = (pi/2)^2 GJ/L``; flap ``k_beta = 1.8751^4 EI/(3L)`` (rigid blade inertia ``m L^3/3``);
-lag likewise with EI_lag. GJ and EI are span averages for a non-uniform blade.
+``k_theta = (pi/2)^2 GJ/L`` (or, with ``rigid_spring = "static"``, the same load-weighted static
+twist under an ``r^2`` moment); collective flap ``k_beta = 1.8751^4 EI/(3L)`` (rigid blade inertia
+``m L^3/3``); lag likewise with EI_lag. GJ and EI are span averages for a non-uniform blade. The
+cyclic flap (hub swinging against the blades) gets its own root spring and an effective teeter
+inertia, derived from the same blade's FEM pinned-free mode (:mod:`amra_core.rigid_equivalence`).
 
 Lag: one rigid lead-lag angle per blade about a root spring at ``r0`` (paper: Lagrange
 equations), inertially coupled with rotor speed: ``[[I_R, S, S], [S, I_z, 0], [S, 0, I_z]]``.
@@ -35,6 +38,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .rigid_equivalence import CyclicFlapEquivalence, apply_cyclic_flap, derive_cyclic_flap, torsion_spring_nm_rad
 from .rotor import Rotor
 from .shapes import BladeMesh
 
@@ -215,10 +219,11 @@ def blade_matrices(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool
 
 def _blade_torsion_stiffness(rotor: Rotor, mesh: BladeMesh, r, wq, dPt) -> np.ndarray:
     """One blade's torsional stiffness over ``[beta, q]``: ``int GJ theta'^2`` (FEM levels) or the
-    rigid level's root spring ``k_theta = (pi/2)^2 GJ/L``."""
+    rigid level's root spring (``mesh.torsion_spring``: ``frequency`` ``k_theta = (pi/2)^2 GJ/L``,
+    or ``static``, :func:`amra_core.rigid_equivalence.torsion_spring_nm_rad`)."""
     if mesh.fidelity == "rigid":
         K = np.zeros((1 + mesh.n_q, 1 + mesh.n_q))
-        K[2, 2] = K_TORSION_SPRING * rotor.stations.mean("gj_nm2") / rotor.blade_length_m
+        K[2, 2] = torsion_spring_nm_rad(rotor, mesh.torsion_spring)
         return K
     GJ = rotor.stations.at("gj_nm2", r)
     return (dPt * (GJ * wq)[:, None]).T @ dPt
@@ -239,6 +244,12 @@ def torsion_stiffness(rotor: Rotor, mesh: BladeMesh) -> np.ndarray:
     for _, idx, S in _blade_slots(mesh.n_q):
         K[np.ix_(idx, idx)] += Kb * np.outer(S, S)
     return K
+
+
+def cyclic_flap_equivalence(rotor: Rotor) -> CyclicFlapEquivalence:
+    """Effective teeter inertia and cyclic root spring of ``rotor``'s equivalent rigid blade, derived
+    from its FEM pinned-free (cyclic flap) mode (:mod:`amra_core.rigid_equivalence`)."""
+    return derive_cyclic_flap(rotor, blade_matrices, K_FLAP_SPRING)
 
 
 def _blade_slots(nq: int):
@@ -360,6 +371,8 @@ def assemble(rotor: Rotor, mesh: BladeMesh, added_mass=None, trapeze: bool = Tru
         I2[b][np.ix_(idx, idx)] = I2b * np.outer(S, S)
     M[0, 0] += rotor.hub_teeter_inertia_kg_m2
     K2[0, 0] += rotor.hub_teeter_inertia_kg_m2  # the hub bar's own centrifugal restoring moment
+    if mesh.fidelity in ("rigid", "fem-torsion"):  # the equivalent rigid blade's cyclic flap
+        apply_cyclic_flap(cyclic_flap_equivalence(rotor), rotor, mesh, M, K0, K2, (1, 1 + nq))
     kinds = ("teeter",) + tuple(["flap"] * mesh.n_flap + ["torsion"] * mesh.n_torsion) * 2
     blade_of = (-1,) + (0,) * nq + (1,) * nq
 

@@ -19,7 +19,7 @@ import numpy as np
 from .. import __version__
 from ..flight import AERO_MODELS, FlightCondition, SolverSettings
 from ..rotor import Rotor
-from ..shapes import FIDELITIES
+from ..shapes import FIDELITIES, TORSION_SPRINGS
 from ..verdict import VERDICTS as RUN_VERDICTS
 from .intervals import WEAK_AMPLITUDE_DEG, WEAK_DAMPING
 
@@ -100,6 +100,7 @@ class MapSpec:
     n_elements: int = 10
     weak_damping: float = WEAK_DAMPING
     weak_amplitude_deg: float = WEAK_AMPLITUDE_DEG
+    rigid_spring: str = "frequency"  #: the rigid level's root torsion spring (SolverSettings.rigid_spring)
 
     def __post_init__(self):
         if not isinstance(self.rotor, (str, Rotor)):
@@ -110,6 +111,9 @@ class MapSpec:
             raise MapSpecError(f"aero = {self.aero!r} is not allowed: choose one of {', '.join(AERO_MODELS)}")
         if self.method not in METHODS:
             raise MapSpecError(f"method = {self.method!r} is not allowed: choose one of {', '.join(METHODS)}")
+        if self.rigid_spring not in TORSION_SPRINGS:
+            raise MapSpecError(f"rigid_spring = {self.rigid_spring!r} is not allowed: choose one of "
+                               f"{', '.join(TORSION_SPRINGS)}")
         _num("mu", self.mu, 0.0, 0.5)
         _num("ea", self.ea, 0.0, 1.0)
         cgs = tuple(self.cg_values) if not isinstance(self.cg_values, (str, bytes)) else None
@@ -145,7 +149,8 @@ class MapSpec:
 
     @property
     def settings(self) -> SolverSettings:
-        return SolverSettings(fidelity=self.fidelity, aero=self.aero, n_elements=self.n_elements)
+        return SolverSettings(fidelity=self.fidelity, aero=self.aero, n_elements=self.n_elements,
+                              rigid_spring=self.rigid_spring)
 
     @property
     def coarse_gj(self) -> tuple:

@@ -12,10 +12,10 @@ import sys
 from .. import __version__
 from ..flight import SettingsError
 from ..rotor import RotorError
-from . import bench, boundary, modes, rotor, serve, simulate, stability, trim, validate
+from . import bench, boundary, modes, rotor, sensitivity, serve, simulate, stability, trim, validate
 from .common import UsageError, check_outputs
 
-COMMANDS = (rotor, modes, trim, simulate, stability, bench, serve, boundary, validate)
+COMMANDS = (rotor, modes, trim, simulate, stability, bench, serve, boundary, sensitivity, validate)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -30,7 +30,7 @@ import warnings
 from ..boundary.intervals import WEAK_AMPLITUDE_DEG, WEAK_DAMPING
 from ..flight import AERO_MODELS
 from ..shapes import FIDELITIES
-from .common import dumps_strict, number, value_range
+from .common import dumps_strict, number, rigid_spring_arg, value_range
 
 
 def register(sub) -> None:
@@ -43,6 +43,7 @@ def register(sub) -> None:
     g.add_argument("--preset", help="shipped rotor preset (default paper-boundary)")
     g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
     p.add_argument("--fidelity", choices=FIDELITIES, default="rigid")
+    rigid_spring_arg(p)
     p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
     p.add_argument("--mu", type=number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
     p.add_argument("--ea", type=number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
@@ -99,7 +100,7 @@ def _spec(args):
     return MapSpec(rotor=rotor, fidelity=args.fidelity, aero=args.aero, mu=args.mu, ea=args.ea, cg_values=cgs,
                    gj_min=args.gj[0], gj_max=args.gj[1], gj_rel_tol=args.tol, n_coarse=args.coarse,
                    method=args.method, n_elements=args.elements, weak_damping=args.weak_damping,
-                   weak_amplitude_deg=args.weak_amplitude)
+                   weak_amplitude_deg=args.weak_amplitude, rigid_spring=args.rigid_spring)
 
 
 def _warn(msg: str) -> None:

@@ -11,7 +11,7 @@ import os
 import stat
 
 from ..flight import FlightCondition
-from ..shapes import FIDELITIES
+from ..shapes import FIDELITIES, TORSION_SPRINGS
 
 
 class UsageError(Exception):
@@ -46,8 +46,15 @@ def flight_args(p):
     g.add_argument("--mu", type=number("--mu", 0.0, 0.5), help="advance ratio of the trimmed state [-]")
     g.add_argument("--airspeed", type=number("--airspeed", 0.0, 80.0), help="horizontal airspeed [m/s]")
     p.add_argument("--fidelity", choices=FIDELITIES, default="rigid")
+    rigid_spring_arg(p)
     p.add_argument("--elements", type=number("--elements", 1, 60, integer=True), default=10,
                    help="FEM elements per blade")
+
+
+def rigid_spring_arg(p):
+    """``--rigid-spring frequency|static`` (:attr:`amra_core.flight.SolverSettings.rigid_spring`)."""
+    p.add_argument("--rigid-spring", choices=TORSION_SPRINGS, default="frequency",
+                   help="the rigid level's root torsion spring: frequency ((pi/2)^2 GJ/L, the cantilever's first torsion frequency; default) or static (the same load-weighted twist under an r^2 moment, about 1.6x softer)")
 
 
 def load_rotor(args):

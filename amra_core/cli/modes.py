@@ -4,12 +4,12 @@ from __future__ import annotations
 import json
 
 from ..shapes import FIDELITIES
-from .common import dumps_strict, load_rotor, number, rotor_args
+from .common import dumps_strict, load_rotor, number, rigid_spring_arg, rotor_args
 
 
 def cmd_modes(args):
     from ..modes import modes_report
-    rep = modes_report(load_rotor(args), args.fidelity, args.elements, args.omega)
+    rep = modes_report(load_rotor(args), args.fidelity, args.elements, args.omega, rigid_spring=args.rigid_spring)
     if args.json:
         print(dumps_strict(rep))
     else:
@@ -25,5 +25,6 @@ def register(sub) -> None:
     p.add_argument("--omega", type=number("--omega", 0.0, 200.0), default=0.0, help="rotor speed [rad/s]")
     p.add_argument("--elements", type=number("--elements", 1, 60, integer=True), default=10)
     p.add_argument("--fidelity", choices=FIDELITIES, default="fem-coupled")
+    rigid_spring_arg(p)
     p.add_argument("--json", action="store_true")
     p.set_defaults(func=cmd_modes)

@@ -12,7 +12,8 @@ from .common import emit, flight, flight_args, load_rotor, number, rotor_args
 def cmd_simulate(args):
     from ..simulation import Case, Simulation
     rotor = load_rotor(args)
-    settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, inflow=args.inflow, n_elements=args.elements)
+    settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, inflow=args.inflow, n_elements=args.elements,
+                              rigid_spring=args.rigid_spring)
     case = Case(rotor, flight(args), settings, t_end_s=args.t_end)
     t0 = time.perf_counter()
     from ..model import compile_model

@@ -10,7 +10,8 @@ from .common import flight, flight_args, dumps_strict, load_rotor, rotor_args
 def cmd_stability(args):
     from ..model import compile_model
     from ..stability import analyse
-    settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, n_elements=args.elements)
+    settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, n_elements=args.elements,
+                              rigid_spring=args.rigid_spring)
     res = analyse(compile_model(load_rotor(args), flight(args), settings))
     out = res.to_dict(include_aero_lag=args.all_modes)
     if not res.trim.ok:

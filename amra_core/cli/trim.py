@@ -9,7 +9,7 @@ def cmd_trim(args):
     from ..model import compile_model
     from ..trim import trim
     rotor = load_rotor(args)
-    settings = SolverSettings(fidelity=args.fidelity, n_elements=args.elements)
+    settings = SolverSettings(fidelity=args.fidelity, n_elements=args.elements, rigid_spring=args.rigid_spring)
     model = compile_model(rotor, flight(args, args.omega_hold), settings)
     res = trim(model)
     emit(res.to_dict(), args.json)

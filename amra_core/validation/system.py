@@ -49,6 +49,8 @@ def run(sec: Section) -> Section:
     _table1(sec)
     _time_histories(sec, n_el, 5.0 if q else 10.0)
     _boundary(sec, n_el)
+    from . import equivalence
+    equivalence.run(sec, n_el)  # the equivalent rigid blade against the FEM (fold GJ with both springs)
     return sec
 
 

@@ -12,9 +12,10 @@ def _paper_rotor(gj, cg):
     return load_preset("paper-boundary").with_overrides(gj_nm2=gj, x_ea=0.32, x_cg=cg)
 
 
-@pytest.mark.parametrize("gj, cg", [(700.0, 0.30), (800.0, 0.30)])
+@pytest.mark.parametrize("gj, cg", [(300.0, 0.30), (400.0, 0.30)])
 def test_eigen_growth_matches_time_marching(gj, cg):
-    """Rigid, axial, theodorsen: cells with one dominant unstable (flutter) mode. The time run
+    """Rigid, axial, theodorsen: cells with one dominant unstable (flutter) mode (torsion meeting
+    the cyclic flap, 12.7 and 13.7 Hz; the column at CG 0.30 is unstable from 216 to 435). The time run
     starts from trim with a 1e-4 kick (linear regime) and lasts 3 s; its envelope growth rate
     must be within 10 % of the eigenvalue's real part, its frequency within 5 %."""
     rotor = _paper_rotor(gj, cg)
@@ -37,11 +38,14 @@ def test_nominal_mccutcheon_linearly_stable(mu):
     assert res.method == ("eigenvalues" if mu == 0 else "floquet")
     assert all(m.real_part_per_s < 0 for m in res.modes)
     labels = {m.label for m in res.modes}
-    assert {"teeter", "torsion", "flap", "lag"} <= labels, labels
-    # the teeter mode sits at 1/rev in the rotating frame (Floquet exponents unfolded to it)
-    teeter = [m for m in res.modes if m.label == "teeter"]
+    assert {"torsion", "flap", "lag"} <= labels, labels
+    # the teeter mode sits at 1/rev in the rotating frame (Floquet exponents unfolded to it). With
+    # aerodynamics it carries flap and twist about as much as teeter (rigid mu 0.1: participation
+    # teeter 0.24, flap 0.25, torsion 0.24; the FEM's 1/rev modes are likewise labelled flap or
+    # torsion), so it is found by its teeter participation, not by its largest one
     omega_hz = res.trim.omega_rad_s / (2 * 3.141592653589793)
-    assert min(abs(m.frequency_hz - omega_hz) for m in teeter) < 0.05 * omega_hz
+    teeter = [m for m in res.modes if m.participation.get("teeter", 0.0) >= 0.2]
+    assert teeter and min(abs(m.frequency_hz - omega_hz) for m in teeter) < 0.05 * omega_hz
 
 
 def test_fem_coupled_forward_cell_is_not_a_numerical_failure():

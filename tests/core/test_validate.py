@@ -72,6 +72,13 @@ def test_no_errors_and_paper_cases_present(quick_report):
         assert f"system.paper-case.{fig}" in ids
     assert {"system.table1.A.rigid", "system.table1.B.fem-coupled", "aero.theodorsen.magnitude",
             "autorotation.descent-rate.rigid", "autorotation.torque-regions.present"} <= ids
+    # the equivalent rigid blade beside the FEM: cyclic flap, static twist, fold GJ with both springs
+    eq = {c["id"]: c for c in doc["cases"] if c["id"].startswith("system.equivalence.")}
+    assert set(eq) == {"system.equivalence.cyclic-flap", "system.equivalence.static-twist",
+                       "system.equivalence.fold-gj"}
+    assert all(c["status"] == "pass" for c in eq.values()), eq
+    folds = eq["system.equivalence.fold-gj"]["details"]["fold_gj_nm2"]
+    assert set(folds) == {"rigid, frequency spring", "rigid, static spring", "fem-coupled"}
 
 
 def test_bad_arguments_exit_2():
