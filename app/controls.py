@@ -1,13 +1,19 @@
-"""The case the user is exploring: bounded, documented parameters and their mapping to a solver Case.
+"""The case the user is exploring: the single source of truth for every control of a session.
 
 One :class:`Controls` per session. ``doc=`` strings (with units) become the widgets' tooltips;
 bounds are enforced by param, so a value from a widget, a preset or the URL is validated the same
-way. :meth:`Controls.case` builds the frozen :class:`amra_core.simulation.Case`; the core's own
+way. Run, Stop, Reset and the fidelity ladder are ``param.Event``s (the buttons are views of them).
+GJ is one parameter, shown twice: a log-scale slider (:func:`gj_slider`) and the exact input.
+:meth:`Controls.case` builds the frozen :class:`amra_core.simulation.Case`; the core's own
 validation (``SettingsError``, ``RotorError``) then names anything the bounds cannot express.
 """
 from __future__ import annotations
 
+import math
+
+import panel as pn
 import param
+from bokeh.models import CustomJSTickFormatter
 
 from amra_core.flight import AERO_MODELS, INFLOW_MODELS, FlightCondition, SolverSettings
 from amra_core.rotor import Rotor
@@ -59,6 +65,12 @@ class Controls(param.Parameterized):
                                 doc="Number of CG columns of the boundary map (20-50 % chord).")
     map_coarse = param.Integer(7, bounds=(3, 20), label="Map coarse GJ values",
                                doc="GJ values of the map's coarse grid (30-3000 N m²/rad, log spaced) before bisection.")
+
+    # -- actions
+    run = param.Event(label="▶ Run", doc="Start a run of the current case (replaces this session's run).")
+    stop = param.Event(label="■ Stop", doc="Stop the run; the plots and verdict stay.")
+    reset = param.Event(label="↺ Reset", doc="Stop the run and clear the plots, verdict and messages.")
+    ladder = param.Event(label="Run fidelity ladder", doc="Run the case at the three fidelities side by side.")
 
     def __init__(self, max_run_s: float = 120.0, **params):
         super().__init__(**params)
@@ -124,4 +136,21 @@ class Controls(param.Parameterized):
         return {"gj_nm2": float(self.gj_nm2), "x_ea": self.ea_pct / 100.0, "x_cg": self.cg_pct / 100.0}
 
     def values(self) -> dict:
-        return {k: getattr(self, k) for k in self.param if k != "name"}
+        return {k: getattr(self, k) for k in self.param if k not in ("name", "run", "stop", "reset", "ladder")}
+
+
+def gj_slider(controls: Controls) -> pn.widgets.FloatSlider:
+    """GJ on a log10 scale, labelled in N m²/rad. A release sets ``controls.gj_nm2``; a change of
+    ``gj_nm2`` from anywhere moves the handle. No echo: a handle moved from the server changes
+    ``value`` only, and only the browser's release changes ``value_throttled``."""
+    lo, hi = (math.log10(b) for b in GJ_BOUNDS)
+    s = pn.widgets.FloatSlider(name="GJ (log scale) [N m²/rad]", start=lo, end=hi, step=0.005,
+                               value=math.log10(controls.gj_nm2), sizing_mode="stretch_width",
+                               format=CustomJSTickFormatter(code="return (10 ** tick).toPrecision(3)"),
+                               css_classes=["amra-gj-slider"])
+
+    def released(event):
+        controls.gj_nm2 = min(max(float(f"{10 ** event.new:.4g}"), GJ_BOUNDS[0]), GJ_BOUNDS[1])
+    s.param.watch(released, "value_throttled")
+    controls.param.watch(lambda e: setattr(s, "value", math.log10(e.new)), "gj_nm2")
+    return s

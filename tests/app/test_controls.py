@@ -9,8 +9,8 @@ from amra_core.flight import SettingsError
 from amra_core.rotor_io import load_preset
 from app.controls import UPLOADED, Controls
 from app.presets import PRESETS
-from app.settings import ServerSettings
-from app.settings import SettingsError as EnvError
+from app.server.settings import ServerSettings
+from app.server.settings import SettingsError as EnvError
 
 
 def test_defaults_give_the_paper_boundary_case():

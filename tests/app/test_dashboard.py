@@ -1,4 +1,4 @@
-"""The session object without a browser: pump -> the plots' data source, apply-live from the controls, stop on
+"""The dashboard without a browser: a run reaches the plots, apply-live from the controls, stop on
 close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as messages."""
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from amra_core.simulation import HISTORY_COLUMNS
-from app.dashboard import Dashboard
-from app.map_jobs import MapRegistry
+from app.app import Dashboard
+from app.server.map_jobs import MapRegistry
 
 
 @pytest.fixture
@@ -29,13 +29,13 @@ def pump_until(d, pred, wait, timeout_s=60, what="condition"):
 
 def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     dash.controls.param.update(run_s=1.0, speed=10.0)
-    assert dash.start_run()
+    dash.controls.param.trigger("run")
     pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
-    data = dash.histories.frame()
+    data = dash.live.frame()
     assert len(data) > 20 and list(data.columns)[:2] == ["t_s", "omega_rad_s"]
     assert data["t_s"].iloc[-1] == pytest.approx(1.0, abs=0.01) and (data["gj_nm2"] == 1500.0).all()
-    assert dash.verdict.verdict.verdict == "stable" and "data-final='true'" in dash.verdict.pane.object
-    assert "finished" in dash.run_status.object
+    assert dash.status.verdict.verdict == "stable" and "data-final='true'" in dash.status.card.object
+    assert "finished" in dash.status.run.object
     csv = dash.history_csv().getvalue().splitlines()
     assert csv[0] == ",".join(HISTORY_COLUMNS) and len(csv) == len(dash.last_history) + 1
 
@@ -43,51 +43,30 @@ def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
 def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     dash.controls.param.update(run_s=4.0, speed=4.0)
     dash.start_run()
-    pump_until(dash, lambda: len(dash.histories.frame()) and dash.histories.frame()["t_s"].iloc[-1] > 0.5,
+    pump_until(dash, lambda: len(dash.live.frame()) and dash.live.frame()["t_s"].iloc[-1] > 0.5,
                wait, what="0.5 s of run")
-    t_change = dash.histories.frame()["t_s"].iloc[-1]
+    t_change = dash.live.frame()["t_s"].iloc[-1]
     dash.controls.gj_nm2 = 700.0
-    pump_until(dash, lambda: (dash.histories.frame()["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
-    data = dash.histories.frame()
+    pump_until(dash, lambda: (dash.live.frame()["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
+    data = dash.live.frame()
     first_new = data[data["gj_nm2"] == 700.0]["t_s"].iloc[0]
     assert first_new > t_change and np.all(np.diff(data["t_s"]) > 0)  # the same run, continuing
-    assert "applied live" in dash.live_note.object
+    assert "applied live" in dash.status.note.object
     # the server's share of the slider latency is measured (change received -> first rows sent)
-    assert len(dash.live_latencies_s) == 1 and 0.0 < dash.live_latencies_s[0] < 30.0
-    dash.stop_run()
-
-
-def test_a_live_changes_first_rows_go_out_though_the_browser_has_not_confirmed_drawing(dash, wait, monkeypatch):
-    """A browser that confirms nothing gets no more batches for ACK_TIMEOUT_S (here a minute), except
-    the first rows computed with the user's own change, which are sent at once."""
-    import app.streams as streams
-    monkeypatch.setattr(streams, "ACK_TIMEOUT_S", 60.0)
-    h = dash.histories
-    h.enable_flow_control()
-    dash.controls.param.update(run_s=20.0, speed=4.0)
-    dash.start_run()
-    pump_until(dash, lambda: h.in_flight >= streams.WINDOW_BATCHES and h.pending_rows > 0, wait,
-               what="the window full of unconfirmed batches")
-    sent = h.batches_sent
-    dash.controls.gj_nm2 = 700.0
-    pump_until(dash, lambda: (np.asarray(h.source.data["gj_nm2"]) == 700.0).any(), wait, timeout_s=30,
-               what="the new GJ sent despite the full window")
-    assert h.batches_sent == sent + 1 and h.in_flight == streams.WINDOW_BATCHES + 1
-    for _ in range(20):  # and then the window holds again
-        dash.pump()
-    assert h.batches_sent == sent + 1
-    dash.stop_run()
+    assert len(dash.session.live_latencies_s) == 1 and 0.0 < dash.session.live_latencies_s[0] < 30.0
+    dash.controls.param.trigger("stop")
+    assert not dash.session.running
 
 
 def test_close_stops_the_worker_and_releases_the_map(dash, wait):
     dash.controls.param.update(run_s=30.0, speed=1.0)
     dash.refresh_analyses()
     dash.start_run()
-    wait(lambda: dash.worker.running, 10, what="the worker")
+    wait(lambda: dash.session.running, 10, what="the run")
     job = dash.map.job
     assert job is not None and id(dash) in job.subscribers
     dash.close()
-    assert not dash.worker.running
+    assert not dash.session.running
     assert id(dash) not in job.subscribers
 
 
@@ -96,7 +75,7 @@ def test_fig10_preset_is_unstable(dash, wait):
     dash.controls.param.update(run_s=6.0, speed=50.0)
     dash.start_run()
     pump_until(dash, lambda: dash.last_history is not None, wait, 120, what="the Fig. 10 run")
-    v = dash.verdict.verdict
+    v = dash.status.verdict
     assert v.unstable, v
     assert any("no trim exists" in t for _, t in dash.messages)  # the start note is shown
 
@@ -132,7 +111,7 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     dash.load_cell(cell)
     assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == cell.gj_nm2
     # the plot holds every cell once, coloured by its class
-    from app.map_view import CLASS_COLOURS
+    from app.views.map import CLASS_COLOURS
     from amra_core.boundary import cell_class
     data = dash.map.cells_source.data
     assert len(data["cg_pct"]) == len(dash.map.cells)
@@ -166,16 +145,32 @@ def test_uploaded_rotor_is_used(dash):
     assert dash.map_spec().rotor.name == "mccutcheon"
 
 
-def test_the_page_registers_no_busy_indicator_shared_by_every_session(dash):
-    """Panel's template busy indicator follows one process-wide busy flag: every event of any
-    session would spin it in every page (and re-layout each page). The page has none."""
+def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
+    """No busy indicator (Panel's busy flag is per process), the views' tabs render lazily, and the
+    page carries the hooks the browser tests use."""
     import holoviews as hv
     import panel as pn
     from bokeh.document import Document
-    from app.layout import build_layout
     hv.extension("bokeh", logo=False)
-    before = len(pn.state._indicators)
-    page = build_layout(dash)
+    page = dash.__panel__()
     assert page.busy_indicator is None
     doc = page.server_doc(Document())
-    assert len(pn.state._indicators) == before and doc.roots
+    assert doc.roots
+    classes = {c for m in doc.models for c in (getattr(m, "css_classes", None) or [])}
+    assert {"amra-run", "amra-stop", "amra-reset", "amra-gj", "amra-gj-slider", "amra-upload"} <= classes
+
+
+def test_the_gj_slider_and_input_are_two_views_of_one_parameter(dash):
+    import math
+    from app.controls import gj_slider
+    slider = gj_slider(dash.controls)
+    dash.controls.gj_nm2 = 420.0
+    assert slider.value == pytest.approx(math.log10(420.0)) and dash.controls.gj_nm2 == 420.0  # no echo
+    with pn_edit(slider):
+        slider.value_throttled = math.log10(2000.0)  # what a release in the browser sets
+    assert dash.controls.gj_nm2 == pytest.approx(2000.0)
+
+
+def pn_edit(widget):
+    import param
+    return param.edit_constant(widget)

@@ -19,7 +19,7 @@ from typing import Optional
 from amra_core.boundary import MapSpec, cell_class, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
 
-from .server_limits import Busy, FairSlots, lower_priority_of_this_thread, open_store
+from .queue import Busy, FairSlots, lower_priority_of_this_thread, open_store
 
 from .settings import ServerSettings
 
@@ -40,7 +40,7 @@ class MapJob:
         self.error = ""
         self.store_error = ""  #: a store write that failed during this job (the map went on)
         self.cancel = threading.Event()
-        self.subscribers: set = set()
+        self.subscribers: dict = {}  #: who -> callback(), called from the map's thread on every change
         self.started_at = time.time()
         self._thread = threading.Thread(target=self._run, name="amra-map", daemon=True)
 
@@ -51,13 +51,14 @@ class MapJob:
         self._thread.join(timeout)
 
     def _run(self) -> None:
-        lower_priority_of_this_thread()  # maps yield the CPU to interactive runs (server_limits)
+        lower_priority_of_this_thread()  # maps yield the CPU to interactive runs (app.server.queue)
         reg = self._registry
-        with reg.slots.slot(self, self.cancel) as got:  # first come, first served (server_limits)
+        with reg.slots.slot(self, self.cancel) as got:  # first come, first served (app.server.queue)
             if not got or self.cancel.is_set():
                 self.state = "cancelled"
                 return
             self.state = "running"
+            self._changed()
             ex = None
             try:
                 # cells in other processes (trim and eigen-analysis hold the GIL: in this process
@@ -71,6 +72,7 @@ class MapJob:
                         self.cells.append(cell)
                         self.cached = run.cached
                         self.estimated_total = max(run.estimated_total, len(self.cells))
+                    self._changed()
                 self.state = "cancelled" if run.cancelled else "done"
             except Exception as exc:  # noqa: BLE001 - shown to every subscriber
                 self.error = f"{type(exc).__name__}: {exc}"
@@ -81,6 +83,12 @@ class MapJob:
                 if self.state == "done":
                     with self._lock:
                         self.estimated_total = len(self.cells)
+                reg.changed()  # every job: its end frees the slot, so queued jobs move up
+
+    def _changed(self) -> None:
+        """Tell the subscribers (each throttles its own redraws, app.throttle)."""
+        for callback in list(self.subscribers.values()):
+            callback()
 
     def snapshot(self, since: int = 0) -> dict:
         """New cells since index ``since`` and the progress."""
@@ -120,7 +128,7 @@ class MapRegistry:
 
     def __init__(self, settings: ServerSettings, max_running: int = 1, max_jobs: int = 24):
         self.settings = settings
-        # a store that cannot be used leaves None and a notice for the page (server_limits)
+        # a store that cannot be used leaves None and a notice for the page (app.server.queue)
         self.store, self.store_notice = open_store(settings.store_path, solver_fingerprint())
         self.slots = FairSlots(max_running)
         self.max_jobs = max_jobs
@@ -129,7 +137,7 @@ class MapRegistry:
         self._live: list = []  #: every job whose thread may still run (cancelled ones included)
         self.jobs_started = 0
 
-    def subscribe(self, spec: MapSpec, who) -> MapJob:
+    def subscribe(self, spec: MapSpec, who, on_change=lambda: None) -> MapJob:
         with self._lock:
             job = self._jobs.get(spec)
             if job is None or job.state in ("cancelled", "failed", "busy"):
@@ -144,23 +152,17 @@ class MapRegistry:
                 self.jobs_started += 1
                 job.start()
             self._jobs.move_to_end(spec)
-            job.subscribers.add(who)
+            job.subscribers[who] = on_change
             self._trim()
             return job
 
     def unsubscribe(self, job: MapJob, who) -> None:
         with self._lock:
-            job.subscribers.discard(who)
+            job.subscribers.pop(who, None)
             if not job.subscribers and job.state in ("queued", "running"):
                 job.cancel.set()
                 if self._jobs.get(job.spec) is job:
                     del self._jobs[job.spec]
-
-    def viewers(self) -> int:
-        """Sessions following a map now (each session follows one): the server's load, by which
-        the sessions space out their map polls and redraws (:meth:`app.map_view.MapView.load_factor`)."""
-        with self._lock:
-            return sum(len(j.subscribers) for j in self._jobs.values())
 
     def related(self, spec: MapSpec) -> dict:
         """``{fidelity: job}`` of the known jobs for ``spec`` at every fidelity (``spec``'s own included)."""
@@ -171,6 +173,13 @@ class MapRegistry:
                 if job is not None:
                     out[fid] = job
         return out
+
+    def changed(self) -> None:
+        """A job started or ended: every subscriber redraws (its queue position may have moved)."""
+        with self._lock:
+            jobs = list(self._jobs.values())
+        for job in jobs:
+            job._changed()
 
     def _trim(self) -> None:
         while len(self._jobs) > self.max_jobs:

@@ -1,13 +1,21 @@
-"""One-shot analyses of a case, run in a worker process (no Panel/HoloViews imports here).
+"""What the process pools compute (no Panel/HoloViews imports here): the one-shot analyses of a
+case (modes, root locus, fan plot, fidelity ladder) and the kernels' warm-up.
 
 Trim and the eigen-analysis are largely Python/SciPy and hold the GIL; in the server's own
-process they would starve the sessions' event loop, so :class:`app.background.LatestTasks` sends
+process they would starve the sessions' event loop, so :class:`app.server.pool.LatestTasks` sends
 these functions to a process pool. Every argument and result is picklable (frozen dataclasses,
 numpy arrays, plain dicts).
+
+The root locus (:func:`walk`) follows ``amra_core.column.walk_column``: trim continuation down a CG
+column with the modes at each step, the fold and flutter crossings bracketed.
 """
 from __future__ import annotations
 
 import math
+import threading
+import time
+from dataclasses import dataclass
+from typing import Optional
 
 import numpy as np
 
@@ -16,18 +24,67 @@ from amra_core.shapes import FIDELITIES
 from amra_core.simulation import COL, Simulation
 from amra_core.stability import analyse
 
-from .locus import walk
-
 LOCUS_GJ_RANGE = (50.0, 3000.0)  #: GJ range of the root locus [N m^2/rad]
 FAN_OMEGA_MAX = 60.0  #: top of the fan plot's speed axis [rad/s]
 LADDER_POINTS = 2000  #: points kept per ladder curve
 
 
+LOCUS_REL_TOL = 0.05  #: bracket of the fold and of flutter crossings along the locus [-]
+
+
+def warm() -> float:
+    """Compile (or load from Numba's cache) what a session uses: trim, a short run with a live
+    change at every fidelity, the stability analysis and the fan plot; returns the time taken [s]."""
+    t0 = time.perf_counter()
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.modes import fan_plot
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case
+
+    rotor = load_preset("paper-boundary")
+    for fid in ("rigid", "fem-torsion", "fem-coupled"):
+        settings = SolverSettings(fidelity=fid)
+        sim = Simulation(Case(rotor, FlightCondition(), settings, t_end_s=0.1))
+        sim.advance(span_s=0.05)
+        sim.set_parameters(gj_nm2=1400.0)
+        sim.advance(span_s=0.05)
+        sim.verdict()
+        sim.spanwise_last_revolution()
+        analyse(compile_model(rotor, FlightCondition(), settings))
+    fan_plot(rotor, [0.0, 30.0], fidelity="rigid")
+    return time.perf_counter() - t0
+
+
 def warm_worker() -> bool:
     """Import and touch the kernels in a fresh worker process."""
-    from .warmup import warm
     warm()
     return True
+
+
+@dataclass(frozen=True)
+class LocusPoint:
+    """The modes of the trim at one GJ [N m²/rad]; ``trimmed`` False where no autorotation exists
+    (then ``modes`` is empty)."""
+
+    gj_nm2: float
+    trimmed: bool
+    modes: tuple  #: stability.Mode, aero-lag modes left out
+    max_real_part_per_s: Optional[float]
+    stable: bool
+
+
+def walk(rotor, flight, settings, cg: float, gj_min_nm2: float, gj_max_nm2: float,
+         cancel: Optional[threading.Event] = None) -> list:
+    """Locus points from ``gj_max_nm2`` down to ``gj_min_nm2`` at chordwise CG ``cg`` [chord fraction]."""
+    from amra_core.column import walk_column
+    cw = walk_column(rotor, flight, settings, cg, gj_min_nm2, gj_max_nm2, rel_tol=LOCUS_REL_TOL, cancel=cancel)
+    out = []
+    for p in cw.points:
+        trimmed = p.branch == "normal" and p.trim is not None
+        modes = tuple(m for m in (p.modes or ()) if m.label != "aero lag") if trimmed else ()
+        re = p.max_real_part_per_s if trimmed and math.isfinite(p.max_real_part_per_s) else None
+        out.append(LocusPoint(float(p.gj_nm2), trimmed, modes, re, bool(p.stable)))
+    return out
 
 
 def modes_result(rotor, flight, settings) -> dict:

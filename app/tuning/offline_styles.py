@@ -1,5 +1,10 @@
 """Page resources (JS, CSS) from this server, never a CDN: classrooms and team servers are often offline.
 
+Reproducer and upstream report: ``docs/upstream/panel-hidden-tab-stylesheets-cdn.md``. The
+work-around is applied only on :data:`CHECKED` (the versions it was verified on); on any other
+Panel the page may fetch two stylesheets from the CDN, which ``test_every_view_tab_opens_offline``
+reports, so an upgrade re-checks whether the bug is still there.
+
 Setting Bokeh's resource mode to ``server`` covers the page as first rendered. It does not cover
 one path in Panel 1.9.4: a pane updated while its model is outside the document (a Markdown pane in
 a tab that is not shown: Panel's dynamic tabs detach the hidden tab's models but still update them)
@@ -18,6 +23,8 @@ from __future__ import annotations
 
 __all__ = ["serve_resources_locally"]
 
+CHECKED = ("1.9.4",)  #: Panel versions with the bug and this fix verified
+
 
 def _local_instead_of_cdn(patch):
     from panel.io.resources import CDN_DIST, get_dist_path, use_cdn
@@ -34,11 +41,15 @@ def _local_instead_of_cdn(patch):
 
 def serve_resources_locally() -> None:
     """Serve Bokeh and Panel JS/CSS from this server and keep later stylesheet patches local."""
-    from bokeh.settings import settings
+    from importlib.metadata import version
+
     import panel.io.resources as resources
     import panel.reactive as reactive
+    from bokeh.settings import settings
 
     settings.resources.set_value("server")
+    if version("panel") not in CHECKED:
+        return
     for module in (resources, reactive):  # theme.base imports it from panel.io.resources per call
         if not getattr(module.patch_stylesheet, "amra_local", False):
             module.patch_stylesheet = _local_instead_of_cdn(module.patch_stylesheet)

@@ -13,6 +13,8 @@ import numpy as np
 import panel as pn
 from holoviews.streams import Pipe
 
+from ..events import Disc
+
 X_DIM = hv.Dimension("x_m", label="x = r cos ψ", unit="m")
 Y_DIM = hv.Dimension("y_m", label="y = r sin ψ", unit="m")
 FIELDS = (("torque_per_length_nm_m", "Torque per span", "N m/m", 1.0, "RdBu_r"),
@@ -36,12 +38,10 @@ def disc_mesh(data: dict, field: str, scale: float):
 
 
 class DiscView(pn.viewable.Viewer):
-    def __init__(self, **params):
+    def __init__(self, session, **params):
         super().__init__(**params)
         self.pipe = Pipe(data={})
-
-    def show(self, data: dict) -> None:
-        self.pipe.send(data)
+        session.subscribe(Disc, lambda ev: self.pipe.send(ev.data))
 
     def _plot(self, data, field, title, unit, scale, cmap):
         mesh = disc_mesh(data, field, scale)

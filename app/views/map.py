@@ -1,16 +1,16 @@
 """The boundary map (paper Fig. 14) for the current EA, μ, fidelity and aerodynamics, filling in.
 
-Cells come from the session's subscription to the server-wide :class:`app.map_jobs.MapJob`
-(stored cells at once, new ones as they finish); a progress bar counts them. The current
-(CG, GJ) is a star; the critical-GJ lines of every fidelity computed so far for the same case are
-overlaid with a legend. Clicking the map loads the nearest cell's (CG, GJ) into the controls.
+Cells come from the session's subscription to the server-wide :class:`app.server.map_jobs.MapJob`
+(stored cells at once, new ones as they finish): the job calls back on every change, and the view
+redraws at most every :data:`REDRAW_S` seconds (:class:`app.throttle.Throttle`); nothing runs
+while the map is idle. A progress bar counts the cells. The current (CG, GJ) is a star; the
+critical-GJ lines of every fidelity computed so far for the same case are overlaid with a legend.
+Clicking the map loads the nearest cell's (CG, GJ) into the controls.
 
 The plot is a plain Bokeh figure on three data sources (cells, boundary lines, marker), not a
-HoloViews overlay: rendering the overlay took 0.93 s of the server's event loop per new session
-(cProfile of a session's page load, 2026-12-01: 40 % of it), and each redraw re-rendered it and
-recomputed the references of every model of the document. Now a redraw streams the new cells into
-their source. Redraws are still spaced, at most every :data:`REDRAW_S` seconds times the load
-factor (the number of sessions following a map, halved), and at once when the map is done.
+HoloViews overlay: a redraw streams the new cells into their source. The boundary lines are
+drawn by :meth:`MapView.draw_boundaries`, the one place to change when the map shows more
+boundaries per fidelity.
 """
 from __future__ import annotations
 
@@ -18,7 +18,6 @@ import csv
 import html
 import io
 import math
-import time
 
 import numpy as np
 import pandas as pd
@@ -30,7 +29,8 @@ from bokeh.plotting import figure
 from amra_core.boundary import MapSpec, cell_class
 from amra_core.stability import CellResult
 
-from .live_text import LiveText
+from ..throttle import Throttle
+from .status import Text
 
 CG_LABEL = "CG [% chord]"
 GJ_LABEL = "GJ [N m²/rad]"
@@ -38,7 +38,8 @@ CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "
                  "failed": "#212121"}
 FIDELITY_STYLE = {"rigid": ("#1565c0", "solid"), "fem-torsion": ("#ef6c00", "dashed"),
                   "fem-coupled": ("#6a1b9a", "dotdash")}
-REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the cells on an idle server [s]
+REDRAW_S = 0.5  #: shortest wall-clock period between redraws of the map [s]
+BUSY_RETRY_MS = 5000  #: a map refused as "server busy" is asked for again after this [ms]
 
 
 CELL_COLUMNS = ("cg_pct", "gj_nm2", "class", "verdict", "growth_rate_per_s", "colour")
@@ -80,8 +81,10 @@ def map_csv(cells) -> io.StringIO:
 
 
 class MapView(pn.viewable.Viewer):
-    def __init__(self, registry, who, on_pick, **params):
+    def __init__(self, registry, who, on_pick, doc=None, **params):
         super().__init__(**params)
+        self.doc = doc if doc is not None and doc.session_context is not None else None
+        self.redraw = Throttle(self.poll, REDRAW_S, doc)
         self.registry = registry
         self.who = who
         self.on_pick = on_pick
@@ -92,32 +95,26 @@ class MapView(pn.viewable.Viewer):
         self.line_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
         self.marker_source = ColumnDataSource({"cg_pct": [40.0], "gj_nm2": [1500.0]})
         self._drawn = 0  #: cells in the plot's source
-        self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", name="map-progress",
+        self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", label="map-progress",
                                                bar_color="info")
-        self.status = LiveText("Map: waiting ...", name="map-status", css_class="amra-map-status")  # (app.live_text)
+        self.status = Text("Map: waiting ...", name="map-status", css_class="amra-map-status")
         self._lines_key = None
-        self._undrawn = False  #: cells received but not drawn yet
-        self._drawn_at = -1e9
         self._class_legends: list = []  #: the cell-class legend of each figure built: shown once there are cells
-
-    def load_factor(self) -> float:
-        """1 on a server with one or two sessions following maps, n/2 with n sessions."""
-        try:
-            return max(1.0, self.registry.viewers() / 2.0)
-        except Exception:  # noqa: BLE001 - a registry stand-in without viewers()
-            return 1.0
 
     # -- subscription
     def follow(self, spec: MapSpec) -> None:
         if self.job is not None and self.job.spec == spec and self.job.state not in ("cancelled", "failed", "busy"):
             return
         self.release()
-        self.job = self.registry.subscribe(spec, self.who)
+        self.job = self.registry.subscribe(spec, self.who, self.redraw.kick)
         self.seen = 0
         self.cells = []
-        self._undrawn = False
         self._draw(reset=True)
         self.progress.value = 0
+        if self.job.state == "busy" and self.doc is not None:  # the queue was full: ask again later
+            job = self.job
+            self.doc.add_timeout_callback(lambda: self.job is job and self.follow(job.spec), BUSY_RETRY_MS)
+        self.redraw.kick()
 
     def release(self) -> None:
         if self.job is not None:
@@ -125,22 +122,13 @@ class MapView(pn.viewable.Viewer):
             self.job = None
 
     def poll(self) -> None:
-        """Pull new cells and progress from the job (event loop)."""
+        """Pull new cells and progress from the job and draw them (event loop)."""
         if self.job is None:
             return
-        if self.job.state == "busy":  # the server's map queue was full: ask again every few seconds
-            self._busy_polls = getattr(self, "_busy_polls", 0) + 1
-            if self._busy_polls % 10 == 0:
-                self.follow(self.job.spec)
         snap = self.job.snapshot(self.seen)
         if snap["cells"]:
             self.cells.extend(snap["cells"])
             self.seen = snap["n"]
-            self._undrawn = True
-        now = time.monotonic()
-        if self._undrawn and (snap["state"] != "running" or now - self._drawn_at >= REDRAW_S * self.load_factor()):
-            self._undrawn = False
-            self._drawn_at = now
             self._draw()
         total = max(snap["total"], 1)
         pct = 100 if snap["state"] == "done" else min(99, int(100 * snap["n"] / total))
@@ -153,12 +141,15 @@ class MapView(pn.viewable.Viewer):
                  "busy": snap["error"]}[snap["state"]]
         text = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
                 f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}")
-        if snap.get("notice"):  # the store could not be used or written (server_limits.open_store)
+        if snap.get("notice"):  # the store could not be used or written (app.server.queue.open_store)
             text += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
         self.status.object = text  # (a same-text set sends nothing)
-        related = self.registry.related(spec)
+        self.draw_boundaries(self.registry.related(spec))
+
+    def draw_boundaries(self, related: dict) -> None:
+        """The critical-GJ line of every fidelity computed so far (``{fidelity: MapJob}``)."""
         lines = {}
-        for fid, job in related.items():
+        for fid, job in related.items():  # noqa: B007
             pts = job.critical_line()
             if len(pts) >= 1:
                 lines[fid] = pts

@@ -12,24 +12,36 @@ from holoviews.streams import Pipe
 
 from amra_core.shapes import FIDELITIES
 
-from .analysis import LADDER_POINTS as MAX_POINTS
-from .streams import DIMS
+from ..compute import LADDER_POINTS as MAX_POINTS
+from ..events import Finished, Ladder
+from ..live import UNITS, columns_from_rows
+
+DIMS = {c: hv.Dimension(c, label=name, unit=unit) for c, (name, unit) in UNITS.items()}
 
 COLOURS = {"rigid": "#1565c0", "fem-torsion": "#ef6c00", "fem-coupled": "#6a1b9a", "previous run": "#9e9e9e",
            "last run": "#1f77b4"}
 
 
 class LadderView(pn.viewable.Viewer):
-    def __init__(self, **params):
+    def __init__(self, session, **params):
         super().__init__(**params)
         self.pipe = Pipe(data={})
         self.table = pn.pane.DataFrame(pd.DataFrame(), index=False, sizing_mode="stretch_width", name="ladder-table")
         self.info = pn.pane.Markdown("Press **Run fidelity ladder** to run the current case at the three "
                                      "fidelities.", name="ladder-info")
         self.compare_pipe = Pipe(data={})
+        self.previous = None  #: the last finished run, as a frame of app.live.COLUMNS
+        session.subscribe(Ladder, lambda ev: self.show(ev.result))
+        session.subscribe(Finished, self._finished)
+
+    def _finished(self, ev: Finished) -> None:
+        if len(ev.history):
+            frame = pd.DataFrame(columns_from_rows(ev.history, float("nan")))
+            self.compare(self.previous, frame)
+            self.previous = frame
 
     def compare(self, previous, current) -> None:
-        """Overlay the previous run on the one that just finished (frames of :mod:`app.streams`)."""
+        """Overlay the previous run on the one that just finished (frames of :data:`app.live.COLUMNS`)."""
         runs = {}
         for label, f in (("previous run", previous), ("last run", current)):
             if f is not None and len(f):
@@ -40,6 +52,7 @@ class LadderView(pn.viewable.Viewer):
         self.compare_pipe.send(runs)
 
     def show(self, result: dict) -> None:
+        self.info.object = "Fidelity ladder: the current case at the three fidelities."
         self.pipe.send(result["runs"])
         self.table.object = pd.DataFrame(result["verdicts"], columns=["fidelity", "verdict", "growth rate [1/s]",
                                                                       "frequency [Hz]", "collapse time [s]",

@@ -1,10 +1,15 @@
-"""One-shot analyses (modes, locus, fan plot, ladder) in a server-wide process pool, latest wins.
+"""Server-wide process pools: GIL-heavy Python work (trims, eigen-analyses) out of the process
+that serves the pages.
 
-The pool (:func:`get_analysis_pool`, one per server process in ``pn.state.cache``) keeps the
-GIL-heavy trim/eigen work out of the process that serves the pages. :class:`LatestTasks` is the
-per-session front: ``submit(key, fn, *args)`` supersedes what this session queued under ``key``
-(a pending call is cancelled, a running one's result is dropped), and results are posted as
-``(key, result)`` through the session's thread-safe ``post``.
+* the **analysis** pool (:func:`get_analysis_pool`): one-shot analyses (modes, locus, fan plot,
+  ladder) at low CPU priority; :class:`LatestTasks` is its per-session front: ``submit(key, event,
+  fn, *args)`` supersedes what this session queued under ``key`` (a pending call is cancelled, a
+  running one's result is dropped) and posts ``event(result)`` through the session's thread-safe
+  ``post``;
+* the **run** pool (:func:`get_run_pool`): the trim that starts a run, at normal priority, so a
+  Run never waits behind another session's analyses.
+
+One of each per server process, in ``pn.state.cache``.
 """
 from __future__ import annotations
 
@@ -13,23 +18,26 @@ import multiprocessing as mp
 import threading
 from typing import Callable
 
+from ..events import Notice
+from .queue import BACKGROUND_NICE
+
 CACHE_KEY = "amra-analysis-pool"
+RUN_CACHE_KEY = "amra-run-pool"
 
 
 class AnalysisPool:
     """``workers`` spawned processes (spawn: the server holds threads, fork could deadlock)."""
 
-    def __init__(self, workers: int = 1):
+    def __init__(self, workers: int = 1, nice: int = BACKGROUND_NICE):
         self.workers = workers
+        self.nice = nice
         self._ctx = mp.get_context("spawn")
         self._lock = threading.Lock()
         self._pool = self._new_pool()
 
     def _new_pool(self):
-        # analyses at low CPU priority: the live runs and the event loop first (server_limits)
-        from .server_limits import BACKGROUND_NICE
         return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
-                                      initializer=_nice, initargs=(BACKGROUND_NICE,))
+                                      initializer=_nice, initargs=(self.nice,))
 
     def submit(self, fn, *args) -> cf.Future:
         with self._lock:
@@ -45,38 +53,47 @@ class AnalysisPool:
             self._pool.shutdown(wait=True, cancel_futures=True)
 
 
-def get_analysis_pool() -> AnalysisPool:
-    """The process-wide pool, created on first use."""
+def _get(key: str, nice: int) -> AnalysisPool:
     import panel as pn
-    pool = pn.state.cache.get(CACHE_KEY)
+    pool = pn.state.cache.get(key)
     if pool is None:
-        new = AnalysisPool()
-        pool = pn.state.cache.setdefault(CACHE_KEY, new)
+        new = AnalysisPool(nice=nice)
+        pool = pn.state.cache.setdefault(key, new)
         if pool is not new:
             new.close()
     return pool
 
 
+def get_analysis_pool() -> AnalysisPool:
+    """The process-wide analysis pool (low priority: live runs and the event loop first)."""
+    return _get(CACHE_KEY, BACKGROUND_NICE)
+
+
+def get_run_pool() -> AnalysisPool:
+    """The process-wide pool that trims new runs (normal priority)."""
+    return _get(RUN_CACHE_KEY, 0)
+
+
 class LatestTasks:
-    def __init__(self, post: Callable[[str, dict], None], pool: AnalysisPool):
+    def __init__(self, post: Callable, pool: AnalysisPool):
         self._post = post
         self._pool = pool
         self._lock = threading.Lock()
         self._latest: dict = {}  #: key -> the future whose result counts
         self._closed = False
 
-    def submit(self, key: str, fn, *args) -> cf.Future:
-        """Run ``fn(*args)`` in the pool; its dict result is posted as ``(key, result)`` unless superseded."""
+    def submit(self, key: str, event, fn, *args) -> cf.Future:
+        """Run ``fn(*args)`` in the pool; ``event(result)`` is posted unless superseded."""
         fut = self._pool.submit(fn, *args)
         with self._lock:
             old = self._latest.get(key)
             self._latest[key] = fut
         if old is not None:
             old.cancel()
-        fut.add_done_callback(lambda f: self._done(key, f))
+        fut.add_done_callback(lambda f: self._done(key, event, f))
         return fut
 
-    def _done(self, key: str, fut: cf.Future) -> None:
+    def _done(self, key: str, event, fut: cf.Future) -> None:
         with self._lock:
             current = self._latest.get(key) is fut
             if current:
@@ -85,9 +102,9 @@ class LatestTasks:
             return
         exc = fut.exception()
         if exc is not None:
-            self._post("error", {"text": f"{key} failed: {type(exc).__name__}: {exc}"})
+            self._post(Notice(f"{key} failed: {type(exc).__name__}: {exc}"))
         else:
-            self._post(key, fut.result())
+            self._post(event(fut.result()))
 
     def idle(self) -> bool:
         with self._lock:

@@ -3,16 +3,19 @@ speed (paper Figs 6-7), per-rev lines dashed, the current rotor speed marked. Fr
 ``amra_core.modes.fan_plot``."""
 from __future__ import annotations
 
-import time
-
 import holoviews as hv
 import numpy as np
 import panel as pn
 from holoviews.streams import Pipe, Stream
 
+from amra_core.simulation import COL
+
+from ..compute import FAN_OMEGA_MAX as OMEGA_MAX
+from ..events import Fan, Rows
+from ..throttle import Throttle
+
 OMEGA_DIM = hv.Dimension("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
 F_DIM = hv.Dimension("frequency_hz", label="Natural frequency", unit="Hz")
-from .analysis import FAN_OMEGA_MAX as OMEGA_MAX
 
 MARK_PERIOD_S = 1.0  #: wall-clock period of the current-speed marker's moves [s]
 
@@ -20,21 +23,23 @@ Omega = Stream.define("Omega", omega=0.0)
 
 
 class FanView(pn.viewable.Viewer):
-    def __init__(self, **params):
+    def __init__(self, session, doc=None, **params):
         super().__init__(**params)
         self.pipe = Pipe(data={})
         self.omega = Omega()
-        self._moved_at = -1e9
+        self._omega_now = 0.0
+        self.marker = Throttle(self._move, MARK_PERIOD_S, doc)  # each move re-renders the plot
+        session.subscribe(Fan, lambda ev: self.pipe.send(ev.result))
+        session.subscribe(Rows, self._rows)
 
-    def show(self, data: dict) -> None:
-        self.pipe.send(data)
+    def _rows(self, ev: Rows) -> None:
+        if len(ev.rows):
+            self._omega_now = float(ev.rows[-1, COL["omega_rad_s"]])
+            self.marker.kick()
 
-    def set_omega(self, omega: float) -> None:
-        """Move the current-speed marker (at most once a second: each move re-renders the plot)."""
-        now = time.monotonic()
-        if abs(omega - self.omega.omega) > 0.05 and now - self._moved_at >= MARK_PERIOD_S:
-            self._moved_at = now
-            self.omega.event(omega=float(omega))
+    def _move(self) -> None:
+        if abs(self._omega_now - self.omega.omega) > 0.05:
+            self.omega.event(omega=self._omega_now)
 
     def _plot(self, data):
         layers = []

@@ -17,6 +17,8 @@ import pandas as pd
 import panel as pn
 from holoviews.streams import Pipe, Stream
 
+from ..events import Locus, Modes
+
 MODE_COLUMNS = ["mode", "frequency [Hz]", "damping ratio [-]", "real part [1/s]", "stable"]
 GJ_DIM = hv.Dimension("gj_nm2", label="GJ", unit="N m²/rad")
 RE_DIM = hv.Dimension("re", label="Real part σ", unit="1/s")
@@ -44,7 +46,7 @@ def critical_frame(points) -> pd.DataFrame:
 
 
 class ModesView(pn.viewable.Viewer):
-    def __init__(self, **params):
+    def __init__(self, session, **params):
         super().__init__(**params)
         self.frame = modes_frame([])
         self.table = pn.pane.DataFrame(self.frame, index=False, sizing_mode="stretch_width", max_height=320,
@@ -55,6 +57,8 @@ class ModesView(pn.viewable.Viewer):
         self.crit_pipe = Pipe(data=critical_frame([]))
         self.current = CurrentGJ()
         self.points = []
+        session.subscribe(Modes, lambda ev: self.show_modes(ev.result))
+        session.subscribe(Locus, lambda ev: self.show_locus(ev.result["points"], ev.result["text"]))
 
     # -- updates (event loop)
     def show_modes(self, result: dict) -> None:

@@ -1,0 +1,258 @@
+"""One session's dashboard: the :class:`Dashboard` viewer composes the controls, the session and
+the views, and turns the controls' actions into work.
+
+Reading order for a newcomer: :mod:`app.controls` (what the user sets: the single source of
+truth), :mod:`app.session` (the run thread and the events it posts, :mod:`app.events`), then
+each view in :mod:`app.live` and :mod:`app.views` (each subscribes to the events it draws).
+Server-wide parts (map jobs, process pools, settings) are in :mod:`app.server`.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+import panel as pn
+
+from amra_core.boundary import MapSpec
+
+from . import compute, exports
+from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
+from .events import Finished, Fan, Ladder, Locus, Modes, Notice, Rows
+from .live import LivePlots, columns_from_rows
+from .presets import PRESETS
+from .rotor_upload import UploadError, parse_rotor_upload
+from .server.pool import LatestTasks, get_analysis_pool
+from .server.settings import ServerSettings
+from .session import Session
+from .throttle import Throttle
+from .views.disc import DiscView
+from .views.fan import FanView
+from .views.ladder import LadderView
+from .views.map import MapView
+from .views.modes import ModesView
+from .views.status import StatusView, run_html
+
+TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
+CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
+                   "aero", "inflow", "map_columns", "map_coarse")
+MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
+REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
+
+
+class Dashboard(pn.viewable.Viewer):
+    def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, run_pool=None,
+                 doc=None, **params):
+        super().__init__(**params)
+        self.settings = settings or ServerSettings.from_env()
+        self.controls = c = Controls(max_run_s=self.settings.max_run_s)
+        self.session = s = Session(doc, run_pool)
+        self.tasks = LatestTasks(s.post, pool if pool is not None else get_analysis_pool())
+        self.messages: list = []
+        self.alert = pn.pane.Alert("", alert_type="danger", visible=False, sizing_mode="stretch_width",
+                                   name="messages")
+        self.live = LivePlots()
+        self.status = StatusView(s, self.notify, doc)
+        self.modes, self.disc, self.fan, self.ladder = ModesView(s), DiscView(s), FanView(s, doc), LadderView(s)
+        self.map = (MapView(registry, who=id(self), on_pick=self.load_cell, doc=doc) if registry is not None
+                    else None)
+        self.uploaded = None
+        self.last_history: Optional[np.ndarray] = None
+        self._locus_key = None
+        self.refresh = Throttle(self.refresh_analyses, REFRESH_PERIOD_S, doc)
+        s.subscribe(Rows, lambda ev: self.live.append(columns_from_rows(ev.rows, ev.gj_nm2)))
+        s.subscribe(Finished, lambda ev: setattr(self, "last_history", ev.history))
+        s.subscribe(Notice, lambda ev: self.notify(ev.text, ev.level))
+        c.param.watch(self.start_run, "run")
+        c.param.watch(lambda e: s.stop(), "stop")
+        c.param.watch(self.reset, "reset")
+        c.param.watch(self.run_ladder, "ladder")
+        c.param.watch(self._on_live, list(LIVE_PARAMETERS))
+        c.param.watch(self._on_case, list(CASE_PARAMETERS))
+        c.param.watch(lambda e: s.set_speed(e.new), "speed")
+
+    # ------------------------------------------------------------------ messages
+    def notify(self, text: str, level: str = "error") -> None:
+        """A visible message: the alert pane (the last three messages, until Reset) and a toast."""
+        self.messages.append((level, text))
+        self.alert.alert_type = {"error": "danger", "warning": "warning", "info": "info"}.get(level, "danger")
+        self.alert.object = "\n\n".join(f"**{lv}:** {t}" for lv, t in self.messages[-3:])
+        self.alert.visible = True
+        if pn.state.curdoc is not None and pn.state.notifications is not None:
+            getattr(pn.state.notifications, level if level in ("error", "warning", "info") else "error")(
+                text, duration=6000)
+
+    # ------------------------------------------------------------------ actions
+    def start_run(self, *_) -> bool:
+        try:
+            case = self.controls.case(self.uploaded)
+        except Exception as exc:  # noqa: BLE001 - RotorError, SettingsError, ValueError
+            self.notify(f"cannot run this case: {exc}")
+            return False
+        self.live.clear()
+        self.status.reset()
+        self.status.run.object = run_html("starting ...")
+        self.session.start(case, self.controls.speed)
+        return True
+
+    def reset(self, *_) -> None:
+        self.session.forget()
+        self.live.clear()
+        self.ladder.previous = None
+        self.ladder.compare(None, None)
+        self.status.reset()
+        self.messages.clear()
+        self.alert.visible = False
+
+    def run_ladder(self, *_) -> None:
+        try:
+            cases = {fid: self.controls.case(self.uploaded, fidelity=fid) for fid in ("rigid", "fem-torsion",
+                                                                                     "fem-coupled")}
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"cannot run the ladder: {exc}")
+            return
+        self.ladder.info.object = "Running the case at rigid, fem-torsion and fem-coupled ..."
+        self.tasks.submit("ladder", Ladder, compute.run_ladder, cases)
+
+    def upload(self, data: bytes, filename: str) -> bool:
+        try:
+            rotor = parse_rotor_upload(data, filename)
+        except UploadError as exc:
+            self.notify(str(exc))
+            return False
+        self.uploaded = rotor
+        if self.controls.rotor == UPLOADED:
+            self.refresh.kick()
+        else:
+            self.controls.rotor = UPLOADED
+        self.notify(f"rotor file {filename!r} loaded: {rotor.name}, R = {rotor.radius_m:g} m", "info")
+        return True
+
+    def load_cell(self, cell) -> None:
+        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 4), gj_nm2=float(cell.gj_nm2))
+        self.notify(f"loaded map cell CG {100 * cell.cg:.1f} % chord, GJ {cell.gj_nm2:.4g} N m²/rad "
+                    f"({cell.verdict}); press Run to simulate it", "info")
+
+    # ------------------------------------------------------------------ parameter changes
+    def _on_live(self, *events) -> None:
+        if self.session.running:
+            self.session.set_live(**self.controls.live_values())
+            c = self.controls
+            self.status.note.object = (f"applied live at the next chunk: GJ {c.gj_nm2:.4g} N m²/rad, "
+                                       f"EA {c.ea_pct:g} %, CG {c.cg_pct:g} %")
+
+    def _on_case(self, *events) -> None:
+        if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):
+            self.status.note.object = "this change takes effect at the next run (only GJ, EA and CG apply live)"
+        self.refresh.kick()
+
+    def map_spec(self) -> MapSpec:
+        c = self.controls
+        rotor = self.uploaded if c.rotor == UPLOADED else c.rotor
+        if rotor is None:
+            raise ValueError("no rotor file uploaded")
+        cgs = tuple(round(float(x), 4) for x in np.linspace(0.20, 0.50, c.map_columns))
+        return MapSpec(rotor=rotor, fidelity=c.fidelity, aero=c.aero, mu=float(c.mu), ea=c.ea_pct / 100.0,
+                       cg_values=cgs, gj_min=MAP_GJ_RANGE[0], gj_max=MAP_GJ_RANGE[1], n_coarse=c.map_coarse)
+
+    def refresh_analyses(self) -> None:
+        """Recompute the modes, root locus and fan plot; follow the map for the current case."""
+        c = self.controls
+        self.modes.set_gj(c.gj_nm2)
+        if self.map is not None:
+            self.map.mark(c.cg_pct, c.gj_nm2)
+        try:
+            rotor, flight, settings = c.rotor_obj(self.uploaded), c.flight(), c.settings()
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"invalid case: {exc}")
+            return
+        self.tasks.submit("modes", Modes, compute.modes_result, rotor, flight, settings)
+        key = (c.rotor, id(self.uploaded), c.ea_pct, c.cg_pct, flight, settings)
+        if key != self._locus_key:
+            self._locus_key = key
+            self.tasks.submit("locus", Locus, compute.locus_result, rotor, flight, settings, c.cg_pct / 100.0)
+        self.tasks.submit("fan", Fan, compute.fan_data, rotor, settings.fidelity)
+        if self.map is not None:
+            try:
+                self.map.follow(self.map_spec())
+            except Exception as exc:  # noqa: BLE001
+                self.notify(f"no map for this case: {exc}")
+
+    def pump(self) -> None:
+        """Run whatever is due now, in the caller's thread (tests and scripts without a server)."""
+        for throttle in (self.session.delivery, self.status.clock, self.fan.marker, self.refresh,
+                         *([self.map.redraw] if self.map is not None else [])):
+            throttle.run_due()
+
+    # ------------------------------------------------------------------ exports
+    def history_csv(self):
+        sim = self.session.sim
+        return exports.history_csv(self.last_history if self.last_history is not None else
+                                   (sim.history if sim is not None else None))
+
+    def map_csv(self):
+        from .views.map import map_csv
+        return map_csv(self.map.cells if self.map is not None else [])
+
+    # ------------------------------------------------------------------ lifecycle
+    def close(self, *args) -> None:
+        """The session ended: stop the run (without waiting), drop its analyses, leave the map."""
+        self.session.close()
+        for throttle in (self.status.clock, self.fan.marker, self.refresh,
+                         *([self.map.redraw] if self.map is not None else [])):
+            throttle.close()
+        self.tasks.close()
+        if self.map is not None:
+            self.map.release()
+
+    # ------------------------------------------------------------------ the page
+    def sidebar(self) -> pn.Column:
+        c = self.controls
+        explanation = pn.pane.Markdown(pn.bind(lambda p: f"*{PRESETS[p].explanation}*", c.param.preset),
+                                       sizing_mode="stretch_width", name="preset-explanation",
+                                       styles={"font-size": "90%"})
+        upload = pn.widgets.FileInput(accept=".toml", multiple=False, name="Rotor file (TOML)",
+                                      sizing_mode="stretch_width", css_classes=["amra-upload"])
+        upload.param.watch(lambda e: e.new is not None and self.upload(e.new, upload.filename or "upload.toml"),
+                           "value")
+
+        def w(cls, name, **kw):  # the parameter's doc is the tooltip, where the widget has one
+            tip = {"description": c.param[name].doc} if "description" in cls.param else {}
+            return cls.from_param(c.param[name], **tip, **kw)
+        full, sel, num, slider = {"sizing_mode": "stretch_width"}, pn.widgets.Select, pn.widgets.FloatInput, \
+            pn.widgets.FloatSlider
+        button = pn.widgets.Button.from_param
+        return pn.Column(
+            w(sel, "preset", **full), explanation, w(sel, "rotor", **full), upload,
+            gj_slider(c), w(num, "gj_nm2", css_classes=["amra-gj"], **full),
+            w(slider, "ea_pct", **full), w(slider, "cg_pct", **full), w(slider, "mu", **full),
+            w(sel, "fidelity", **full),
+            pn.Row(w(sel, "aero", width=140), w(sel, "inflow", width=140)),
+            pn.Row(w(num, "run_s", width=140), w(num, "speed", width=140)),
+            pn.Row(button(c.param.run, button_type="primary", css_classes=["amra-run"]),
+                   button(c.param.stop, button_type="warning", css_classes=["amra-stop"]),
+                   button(c.param.reset, button_type="light", css_classes=["amra-reset"])),
+            button(c.param.ladder, sizing_mode="stretch_width", css_classes=["amra-ladder"]),
+            pn.Card(w(num, "airspeed_m_s"), w(num, "omega_hold_rad_s"), w(pn.widgets.IntInput, "map_columns"),
+                    w(pn.widgets.IntInput, "map_coarse"), title="Advanced: flight and map grid", collapsed=True,
+                    sizing_mode="stretch_width"),
+            exports.export_bar(self.history_csv, self.modes.csv, self.map_csv),
+            sizing_mode="stretch_width", name="sidebar")
+
+    def main(self) -> pn.Column:
+        top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+        live = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
+                          sizing_mode="stretch_width")
+        tabs = pn.Tabs(("Boundary map", self.map if self.map is not None else pn.pane.Markdown("map disabled")),
+                       ("Modes & root locus", self.modes), ("Rotor disc", self.disc), ("Fan plot", self.fan),
+                       ("Fidelity ladder", self.ladder), dynamic=True, sizing_mode="stretch_width", name="views")
+        # the plots are rendered after the first paint (Panel's defer_load)
+        return pn.Column(top, pn.panel(lambda: live, defer_load=True, sizing_mode="stretch_width"),
+                         pn.panel(lambda: tabs, defer_load=True, sizing_mode="stretch_width"),
+                         sizing_mode="stretch_width", name="main")
+
+    def __panel__(self):
+        # one root per template area (each root added to a document makes Bokeh recompute its
+        # references); no busy indicator (Panel's busy flag is per process: every session's events
+        # would spin every page's indicator)
+        return pn.template.BootstrapTemplate(title=TITLE, sidebar=[self.sidebar()], main=[self.main()],
+                                             sidebar_width=330, header_background="#263238", busy_indicator=None)
