@@ -17,7 +17,7 @@ from amra_core.boundary import MapSpec
 
 from . import compute, exports
 from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
-from .events import Finished, Fan, Ladder, Locus, Modes, Notice, Rows
+from .events import Finished, Fan, Ladder, Locus, ModeFrames, Modes, Notice, Rows
 from .live import LivePlots, columns_from_rows
 from .presets import PRESETS
 from .rotor_upload import UploadError, parse_rotor_upload
@@ -30,6 +30,7 @@ from .views.fan import FanView
 from .views.ladder import LadderView
 from .views.map import MapView
 from .views.modes import ModesView
+from .views.rotor import LiveRotor
 from .views.status import StatusView, run_html
 
 TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
@@ -53,6 +54,8 @@ class Dashboard(pn.viewable.Viewer):
         self.live = LivePlots()
         self.status = StatusView(s, self.notify, doc)
         self.modes, self.disc, self.fan, self.ladder = ModesView(s), DiscView(s), FanView(s, doc), LadderView(s)
+        self.rotor_view = LiveRotor(s)
+        self.modes.on_pick = self.animate_mode
         self.map = (MapView(registry, who=id(self), on_pick=self.load_cell, doc=doc) if registry is not None
                     else None)
         self.uploaded = None
@@ -112,6 +115,17 @@ class Dashboard(pn.viewable.Viewer):
             return
         self.ladder.info.object = "Running the case at rigid, fem-torsion and fem-coupled ..."
         self.tasks.submit("ladder", Ladder, compute.run_ladder, cases)
+
+    def animate_mode(self, real_part_per_s: float, frequency_hz: float, label: str) -> None:
+        """Compute the frames of a mode of the current case's trim (analysis pool)."""
+        c = self.controls
+        try:
+            rotor, flight, settings = c.rotor_obj(self.uploaded), c.flight(), c.settings()
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"invalid case: {exc}")
+            return
+        self.tasks.submit("mode-frames", ModeFrames, compute.mode_frames, rotor, flight, settings,
+                          real_part_per_s, frequency_hz, label)
 
     def upload(self, data: bytes, filename: str) -> bool:
         try:
@@ -243,7 +257,8 @@ class Dashboard(pn.viewable.Viewer):
         live = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
                           sizing_mode="stretch_width")
         tabs = pn.Tabs(("Boundary map", self.map if self.map is not None else pn.pane.Markdown("map disabled")),
-                       ("Modes & root locus", self.modes), ("Rotor disc", self.disc), ("Fan plot", self.fan),
+                       ("Modes & root locus", self.modes), ("Live rotor", self.rotor_view),
+                       ("Rotor disc", self.disc), ("Fan plot", self.fan),
                        ("Fidelity ladder", self.ladder), dynamic=True, sizing_mode="stretch_width", name="views")
         # the plots are rendered after the first paint (Panel's defer_load)
         return pn.Column(top, pn.panel(lambda: live, defer_load=True, sizing_mode="stretch_width"),

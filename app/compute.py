@@ -145,3 +145,33 @@ def run_ladder(cases: dict) -> dict:
                      "twist_deg": np.degrees(h[:, COL["tip_twist_0_rad"]])}
         rows.append((fid, v.verdict, v.growth_rate_per_s, v.frequency_hz, v.collapse_time_s, v.explanation))
     return {"runs": runs, "verdicts": rows}
+
+
+MODE_FRAMES = 24  #: frames of a mode animation (one cycle)
+MODE_FLAP_DRAWN = 0.25  #: largest tip flap of a mode as drawn [fraction of the radius]
+MODE_TWIST_DRAWN_RAD = math.radians(20.0)  #: largest twist of a mode as drawn [rad]
+
+
+def mode_frames(rotor, flight, settings, real_part_per_s: float, frequency_hz: float, label: str = "") -> dict:
+    """Frames of the trim's mode nearest ``real_part_per_s + i 2 pi frequency_hz`` for
+    :class:`app.views.rotor.ModeAnimation`: flap (teeter with it) and twist each scaled to be
+    visible (a mode's size is arbitrary), with its true flap-per-twist mix in the ``text``."""
+    from amra_core.pose import mode_animation
+    from amra_core.trim import trim
+    with np.errstate(all="ignore"):
+        tr = trim(compile_model(rotor, flight, settings))
+    if not tr.ok:
+        return {"error": f"no trimmed autorotation for this case, so no modes ({tr.reason})"}
+    a = mode_animation(tr.model, tr.state, real_part_per_s, frequency_hz, n_frames=MODE_FRAMES)
+    flap_to_m = MODE_FLAP_DRAWN * rotor.radius_m  # a.flap peaks at 1
+    t_max = float(np.abs(a.twist).max())
+    twist = a.twist * (MODE_TWIST_DRAWN_RAD / t_max) if t_max > 0 else a.twist
+    cyclic = float(np.abs(a.flap[:, 0] + a.flap[:, 1]).max()) < float(np.abs(a.flap[:, 0] - a.flap[:, 1]).max())
+    kind = "cyclic (the blades move oppositely: the hub teeters)" if cyclic else "collective (both blades alike)"
+    mix = (f"{a.flap_per_twist_m_rad * math.radians(1.0) * 100:.3g} cm of tip flap per degree of tip twist"
+           if math.isfinite(a.flap_per_twist_m_rad) else "flap only")
+    text = (f"**{label or 'mode'}**, {abs(a.eigenvalue.imag) / (2 * math.pi):.3g} Hz, real part "
+            f"{a.eigenvalue.real:+.3g} 1/s: {kind}. Drawn with flap and twist each scaled to be visible; "
+            f"the mode's true mix is {mix}.")
+    return {"r_m": tr.model.arrays.st[:, 0].tolist(), "flap": (a.flap * flap_to_m).tolist(),
+            "twist": twist.tolist(), "teeter": (a.teeter * flap_to_m).tolist(), "text": text}

@@ -63,6 +63,19 @@ class VerdictNews:
 
 
 @dataclass(frozen=True)
+class Pose:
+    """Both blades' shape at ``t_s`` (``amra_core.pose.RotorPose``), for the live rotor drawing."""
+    run_id: int
+    pose: Any
+    t_s: float
+
+
+@dataclass(frozen=True)
+class ModeFrames:
+    result: dict  #: app.compute.mode_frames
+
+
+@dataclass(frozen=True)
 class Disc:
     """Spanwise distributions over the last revolution (``Simulation.spanwise_last_revolution``)."""
     run_id: int

@@ -23,9 +23,10 @@ from typing import Optional
 
 import numpy as np
 
+from amra_core.pose import rotor_pose
 from amra_core.simulation import Case, Simulation
 
-from .events import Applied, Disc, Finished, Notice, Rows, RunStatus, Started, VerdictNews
+from .events import Applied, Disc, Finished, Notice, Pose, Rows, RunStatus, Started, VerdictNews
 from .throttle import Throttle
 
 TICK_S = 0.06  #: wall-clock period of a chunk [s]
@@ -67,7 +68,7 @@ class Session:
 
     def deliver(self) -> None:
         """Hand the queued events to their subscribers, in order (event loop)."""
-        rows = []
+        rows, pose = [], None
         while True:
             try:
                 ev = self._inbox.get_nowait()
@@ -78,11 +79,17 @@ class Session:
             if isinstance(ev, Rows):
                 rows.append(ev)
                 continue
+            if isinstance(ev, Pose):  # only the latest shape is drawn
+                pose = ev
+                continue
             self._dispatch_rows(rows)
             rows = []
             for handler in self._handlers[type(ev)]:
                 handler(ev)
         self._dispatch_rows(rows)
+        if pose is not None:
+            for handler in self._handlers[Pose]:
+                handler(pose)
 
     def _dispatch_rows(self, rows: list) -> None:
         if not rows:
@@ -178,6 +185,7 @@ class Session:
                 with np.errstate(all="ignore"):
                     rows = sim.advance(span_s=min(speed * TICK_S, t_end - sim.t))
                 post(Rows(run_id, rows, gj, sim.t))
+                post(Pose(run_id, rotor_pose(sim.model, sim.y), sim.t))
                 if time.perf_counter() - last_views >= VERDICT_PERIOD_S:
                     last_views = time.perf_counter()
                     self._post_views(sim, run_id, final=False)

@@ -17,7 +17,8 @@ import pandas as pd
 import panel as pn
 from holoviews.streams import Pipe, Stream
 
-from ..events import Locus, Modes
+from ..events import Locus, ModeFrames, Modes
+from .rotor import ModeAnimation
 
 MODE_COLUMNS = ["mode", "frequency [Hz]", "damping ratio [-]", "real part [1/s]", "stable"]
 GJ_DIM = hv.Dimension("gj_nm2", label="GJ", unit="N m²/rad")
@@ -57,6 +58,13 @@ class ModesView(pn.viewable.Viewer):
         self.crit_pipe = Pipe(data=critical_frame([]))
         self.current = CurrentGJ()
         self.points = []
+        #: pick a mode to watch its shape; ``on_pick(real_part_per_s, frequency_hz, label)`` computes it
+        self.pick = pn.widgets.Select(label="Watch a mode's shape", options={"(choose a mode)": None},
+                                      sizing_mode="stretch_width", css_classes=["amra-mode-pick"])
+        self.animation = ModeAnimation()
+        self.on_pick = None
+        self.pick.param.watch(self._picked, "value")
+        session.subscribe(ModeFrames, lambda ev: self.animation.load(ev.result))
         session.subscribe(Modes, lambda ev: self.show_modes(ev.result))
         session.subscribe(Locus, lambda ev: self.show_locus(ev.result["points"], ev.result["text"]))
 
@@ -66,6 +74,17 @@ class ModesView(pn.viewable.Viewer):
         self.frame = modes_frame(modes)
         self.table.object = self.frame
         self.info.object = result.get("text", "")
+        options = {"(choose a mode)": None}
+        for m in modes:
+            if m.label != "aero lag":
+                options[f"{m.label}, {m.frequency_hz:.3g} Hz, σ {m.real_part_per_s:+.3g} 1/s"] = (
+                    m.real_part_per_s, m.frequency_hz, m.label)
+        self.pick.options = options
+
+    def _picked(self, event) -> None:
+        if event.new is not None and self.on_pick is not None:
+            self.animation.info.object = "Computing the mode's shape ..."
+            self.on_pick(*event.new)
 
     def show_locus(self, points, text: str) -> None:
         self.points = points
@@ -108,5 +127,6 @@ class ModesView(pn.viewable.Viewer):
         return pn.Column(
             pn.Row(pn.Column(self.info, self.table, sizing_mode="stretch_width"),
                    pn.pane.HoloViews(crit, sizing_mode="stretch_width"), sizing_mode="stretch_width"),
+            pn.Card(self.pick, self.animation, title="Watch a mode", sizing_mode="stretch_width"),
             self.locus_info, pn.pane.HoloViews(locus, sizing_mode="stretch_width"),
             sizing_mode="stretch_width")
