@@ -40,6 +40,15 @@ MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
 REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
 
 
+def teeter_amplitude_rad(history: np.ndarray) -> float:
+    """First-harmonic (1/rev) teeter amplitude [rad] over the last revolution of a history."""
+    from amra_core.simulation import COL
+    omega = max(float(history[-1, COL["omega_rad_s"]]), 1e-6)
+    last = history[history[:, COL["t_s"]] >= history[-1, COL["t_s"]] - 2 * np.pi / omega]
+    beta, psi = last[:, COL["teeter_rad"]], last[:, COL["azimuth_rad"]]
+    return float(np.hypot(2 * np.mean(beta * np.cos(psi)), 2 * np.mean(beta * np.sin(psi))))
+
+
 class Dashboard(pn.viewable.Viewer):
     def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, run_pool=None,
                  doc=None, **params):
@@ -63,7 +72,8 @@ class Dashboard(pn.viewable.Viewer):
         self._locus_key = None
         self.refresh = Throttle(self.refresh_analyses, REFRESH_PERIOD_S, doc)
         s.subscribe(Rows, lambda ev: self.live.append(columns_from_rows(ev.rows, ev.gj_nm2)))
-        s.subscribe(Finished, lambda ev: setattr(self, "last_history", ev.history))
+        s.subscribe(Finished, self._finished)
+        self._run_preset = "custom"  #: the preset the current run was started with
         s.subscribe(Notice, lambda ev: self.notify(ev.text, ev.level))
         c.param.watch(self.start_run, "run")
         c.param.watch(lambda e: s.stop(), "stop")
@@ -87,15 +97,24 @@ class Dashboard(pn.viewable.Viewer):
     # ------------------------------------------------------------------ actions
     def start_run(self, *_) -> bool:
         try:
-            case = self.controls.case(self.uploaded)
+            scenario = self.controls.scenario(self.uploaded)
         except Exception as exc:  # noqa: BLE001 - RotorError, SettingsError, ValueError
             self.notify(f"cannot run this case: {exc}")
             return False
         self.live.clear()
         self.status.reset()
         self.status.run.object = run_html("starting ...")
-        self.session.start(case, self.controls.speed)
+        self.session.start(scenario.case, self.controls.speed, scenario.changes)
+        self._run_preset = self.controls.preset
         return True
+
+    def _finished(self, ev) -> None:
+        self.last_history = ev.history
+        ref = PRESETS[self._run_preset].teeter_reference_rad
+        if ref is not None and len(ev.history):
+            beta = teeter_amplitude_rad(ev.history)
+            self.status.note.object = (f"Teeter amplitude (1/rev, last revolution): this model {beta:.3f} rad; "
+                                       f"measured in flight {ref[0]:.3f} rad; original AMRA {ref[1]:.3f} rad")
 
     def reset(self, *_) -> None:
         self.session.forget()

@@ -16,6 +16,8 @@ import param
 from bokeh.models import CustomJSTickFormatter
 
 from amra_core.flight import AERO_MODELS, INFLOW_MODELS, FlightCondition, SolverSettings
+from amra_core.paper_cases import NOMINAL_GJ_NM2
+from amra_core.scenario import LiveChange, Scenario
 from amra_core.rotor import Rotor
 from amra_core.rotor_io import load_preset, preset_names
 from amra_core.shapes import FIDELITIES
@@ -58,6 +60,10 @@ class Controls(param.Parameterized):
     # -- the run
     run_s = param.Number(10.0, bounds=(0.5, 120.0), step=0.5, label="Run length [s]",
                          doc="Simulated time of a run [s] (capped by the server's AMRA_MAX_RUN_S).")
+    soften_at_s = param.Number(0.0, bounds=(0.0, 600.0), step=0.5, label="Soften at [s] (0: from the start)",
+                               doc=f"When above 0, the run starts from the nominal blade (GJ {NOMINAL_GJ_NM2:g} N m²/rad) "
+                                   "in steady autorotation and the GJ above is applied at this time [s], as a live "
+                                   "change (the paper's Figs 10-13 are told this way). Must be shorter than the run.")
     speed = param.Number(1.0, bounds=(0.1, 50.0), step=0.1, label="Playback [sim s per s]",
                          doc="Simulated seconds per wall-clock second while streaming (the solver is faster).")
     # -- the map
@@ -97,7 +103,7 @@ class Controls(param.Parameterized):
                 self._applying_preset = False
 
     @param.depends(*[p for p in ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s",
-                                 "fidelity", "aero", "inflow")], watch=True)
+                                 "fidelity", "aero", "inflow", "soften_at_s")], watch=True)
     def _left_preset(self):
         if not self._applying_preset and self.preset != "custom":
             values = PRESETS[self.preset].as_dict()
@@ -130,6 +136,17 @@ class Controls(param.Parameterized):
     def case(self, uploaded: Rotor | None = None, fidelity: str | None = None) -> Case:
         """The solver case for the current values (raises ValueError naming a bad value)."""
         return Case(self.rotor_obj(uploaded), self.flight(), self.settings(fidelity), t_end_s=float(self.run_s))
+
+    def scenario(self, uploaded: Rotor | None = None) -> Scenario:
+        """The run to start: the case, and with ``soften_at_s`` the nominal blade softened to GJ then."""
+        case = self.case(uploaded)
+        if not self.soften_at_s:
+            return Scenario(case)
+        if not self.soften_at_s < self.run_s:
+            raise ValueError(f"soften at = {self.soften_at_s:g} s is not allowed: must be shorter than the run "
+                             f"length ({self.run_s:g} s), or 0 for no softening")
+        stiff = Case(case.rotor.with_overrides(gj_nm2=NOMINAL_GJ_NM2), case.flight, case.settings, case.t_end_s)
+        return Scenario(stiff, (LiveChange(float(self.soften_at_s), gj_nm2=float(self.gj_nm2)),))
 
     def live_values(self) -> dict:
         """The mid-run changeable values in the units of ``Simulation.set_parameters``."""

@@ -24,6 +24,7 @@ from typing import Optional
 import numpy as np
 
 from amra_core.pose import rotor_pose
+from amra_core.scenario import Scenario, apply_change
 from amra_core.simulation import Case, Simulation
 
 from .events import Applied, Disc, Finished, Notice, Pose, Rows, RunStatus, Started, VerdictNews
@@ -109,16 +110,17 @@ class Session:
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive() and not self._stop.is_set()
 
-    def start(self, case: Case, speed: float = 1.0) -> int:
-        """Start a run of ``case`` (the current one is told to stop); returns its run id."""
+    def start(self, case: Case, speed: float = 1.0, changes: tuple = ()) -> int:
+        """Start a run of ``case`` (the current one is told to stop), applying the scripted
+        ``changes`` (``amra_core.scenario.LiveChange``) at their times; returns its run id."""
         self._stop.set()
         with self._lock:
             self.run_id += 1
             self._pending, self._speed = {}, float(speed)
             self._stop = stop = threading.Event()
             run_id = self.run_id
-        self._thread = threading.Thread(target=self._loop, args=(case, run_id, stop), name=f"amra-run-{run_id}",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._loop, args=(Scenario(case, tuple(changes)), run_id, stop),
+                                        name=f"amra-run-{run_id}", daemon=True)
         self._thread.start()
         return run_id
 
@@ -153,8 +155,8 @@ class Session:
             pend, self._pending = self._pending, {}
             return pend, self._speed
 
-    def _loop(self, case: Case, run_id: int, stop: threading.Event) -> None:
-        post = self.post
+    def _loop(self, scenario: Scenario, run_id: int, stop: threading.Event) -> None:
+        case, post = scenario.case, self.post
         post(RunStatus(run_id, "trimming", "finding the trimmed autorotation ..."))
         try:
             sim = (self.run_pool.submit(new_simulation, case).result() if self.run_pool is not None
@@ -182,9 +184,14 @@ class Session:
                         post(Applied(run_id, pend, sim.t))
                     except Exception as exc:  # noqa: BLE001
                         post(Notice(f"could not apply {pend} mid-run: {exc}"))
+                t_before, t_next = sim.t, scenario.next_change_s(sim.t) or t_end  # chunks end at a change
                 with np.errstate(all="ignore"):
-                    rows = sim.advance(span_s=min(speed * TICK_S, t_end - sim.t))
+                    rows = sim.advance(span_s=max(min(speed * TICK_S, t_end - sim.t, t_next - sim.t), 1e-6))
                 post(Rows(run_id, rows, gj, sim.t))
+                for change in scenario.due(t_before, sim.t):
+                    apply_change(sim, change)
+                    gj = float(np.mean(sim.case.rotor.stations.gj_nm2))
+                    post(Applied(run_id, {"gj_nm2": change.gj_nm2, "scripted": True}, sim.t))
                 post(Pose(run_id, rotor_pose(sim.model, sim.y), sim.t))
                 if time.perf_counter() - last_views >= VERDICT_PERIOD_S:
                     last_views = time.perf_counter()

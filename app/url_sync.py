@@ -16,7 +16,7 @@ import param
 #: control name -> URL key
 URL_KEYS = {"preset": "preset", "rotor": "rotor", "gj_nm2": "gj", "ea_pct": "ea", "cg_pct": "cg", "mu": "mu",
             "airspeed_m_s": "v", "omega_hold_rad_s": "omega_hold", "fidelity": "fidelity", "aero": "aero",
-            "inflow": "inflow", "run_s": "run_s", "speed": "speed", "map_columns": "map_columns",
+            "inflow": "inflow", "run_s": "run_s", "soften_at_s": "soften_at", "speed": "speed", "map_columns": "map_columns",
             "map_coarse": "map_coarse"}
 _BY_KEY = {v: k for k, v in URL_KEYS.items()}
 

@@ -108,8 +108,10 @@ class StatusView(pn.viewable.Viewer):
 
     def _applied(self, ev: Applied) -> None:
         v = ev.values
-        self.note.object = (f"applied live at t = {ev.t_s:.2f} s: GJ {v['gj_nm2']:.4g} N m²/rad, "
-                            f"EA {100 * v['x_ea']:.3g} %, CG {100 * v['x_cg']:.3g} %")
+        parts = [f"GJ {v['gj_nm2']:.4g} N m²/rad"] if v.get("gj_nm2") is not None else []
+        parts += [f"{n} {100 * v[k]:.3g} %" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if v.get(k) is not None]
+        how = "softened as scripted" if v.get("scripted") else "applied live"
+        self.note.object = f"{how} at t = {ev.t_s:.2f} s: {', '.join(parts)}"
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict
