@@ -17,7 +17,7 @@ from amra_core.boundary import MapSpec
 
 from . import compute, exports
 from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
-from .events import Finished, Fan, Ladder, Locus, ModeFrames, Modes, Notice, Rows
+from .events import Applied, Finished, Fan, Ladder, Locus, ModeFrames, Modes, Notice, Rows
 from .live import LivePlots, columns_from_rows
 from .presets import PRESETS
 from .rotor_upload import UploadError, parse_rotor_upload
@@ -38,6 +38,13 @@ CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", 
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
 REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
+
+
+def change_label(values: dict) -> str:
+    """Short text of a live change's new values (GJ [N m²/rad], EA and CG [% chord])."""
+    parts = [f"GJ {values['gj_nm2']:.4g}"] if values.get("gj_nm2") is not None else []
+    parts += [f"{n} {100 * values[k]:.3g}%" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if values.get(k) is not None]
+    return " ".join(parts)
 
 
 def teeter_amplitude_rad(history: np.ndarray) -> float:
@@ -73,6 +80,7 @@ class Dashboard(pn.viewable.Viewer):
         self.refresh = Throttle(self.refresh_analyses, REFRESH_PERIOD_S, doc)
         s.subscribe(Rows, lambda ev: self.live.append(columns_from_rows(ev.rows, ev.gj_nm2)))
         s.subscribe(Finished, self._finished)
+        s.subscribe(Applied, lambda ev: self.live.mark(ev.t_s, change_label(ev.values)))
         self._run_preset = "custom"  #: the preset the current run was started with
         s.subscribe(Notice, lambda ev: self.notify(ev.text, ev.level))
         c.param.watch(self.start_run, "run")

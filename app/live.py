@@ -20,7 +20,7 @@ import math
 import numpy as np
 import pandas as pd
 from bokeh.events import RangesUpdate, Reset
-from bokeh.models import ColumnDataSource, DataRange1d, HoverTool, Legend
+from bokeh.models import ColumnDataSource, DataRange1d, HoverTool, LabelSet, Legend
 from bokeh.plotting import figure
 from tsdownsample import MinMaxDownsampler, NaNMinMaxDownsampler
 
@@ -31,6 +31,9 @@ UNITS = {"t_s": ("Time", "s"), "omega_rad_s": ("Rotor speed Ω", "rad/s"), "teet
          "twist0_deg": ("Tip twist", "deg"), "twist1_deg": ("Tip twist", "deg"),
          "descent_m_s": ("Descent rate", "m/s"), "gj_nm2": ("GJ", "N m²/rad")}
 COLUMNS = tuple(UNITS)
+#: smallest y-axis span per plot [display units]: a steady run looks steady (0.003 rad/s of round-off
+#: on a 34 rad/s rotor speed is not blown up to fill the plot)
+MIN_SPAN = {"omega_rad_s": 2.0, "teeter_deg": 0.5, "twist0_deg": 0.5, "descent_m_s": 2.0}
 #: (curves, title, colours) per plot
 PLOTS = ((("omega_rad_s",), "Rotor speed", ("#1f77b4",)),
          (("teeter_deg",), "Teeter angle", ("#2ca02c",)),
@@ -100,6 +103,8 @@ class LivePlots:
         self.history = History()
         self.sources = [ColumnDataSource(self._empty(curves)) for curves, _, _ in PLOTS]
         self.sources[0].name = "amra-live-omega"
+        #: live and scripted changes: time [s] and what changed, drawn as a vertical line in every plot
+        self.markers = ColumnDataSource({"t_s": [], "text": []}, name="amra-live-markers")
         self.zoom: tuple | None = None  #: the visible time range [s] while the user has zoomed
         self.sent_rows = 0  #: rows of the history represented in the plots
         self.last_sent_gj = float("nan")
@@ -114,6 +119,7 @@ class LivePlots:
         self.history.clear()
         self.zoom, self.sent_rows, self._density = None, 0, 1.0
         self._counts = [0] * len(PLOTS)
+        self.markers.data = {"t_s": [], "text": []}
         for src, (curves, _, _) in zip(self.sources, PLOTS):
             src.data = self._empty(curves)
 
@@ -136,6 +142,10 @@ class LivePlots:
             src.stream({c: cols[c][idx] for c in ("t_s", *curves, "gj_nm2")})
             self._counts[i] += len(idx)
         return n
+
+    def mark(self, t_s: float, text: str) -> None:
+        """A vertical line at ``t_s`` [s] in every plot, labelled ``text`` (a change's new value)."""
+        self.markers.stream({"t_s": [float(t_s)], "text": [text]})
 
     def _fill(self, cols: dict, points: int) -> None:
         """Each plot's source from ``cols``, at most ``points`` rows (shared by a plot's curves)."""
@@ -189,7 +199,7 @@ class LivePlots:
         out = []
         for (curves, title, colours), src in zip(PLOTS, self.sources):
             fig = figure(title=title, height=220, sizing_mode="stretch_width", x_range=x_range,
-                         y_range=DataRange1d(only_visible=True, syncable=False),
+                         y_range=DataRange1d(only_visible=True, syncable=False, min_interval=MIN_SPAN[curves[0]]),
                          tools="pan,box_zoom,wheel_zoom,reset,save", x_axis_label=label("t_s"),
                          y_axis_label=label(curves[0]), output_backend="canvas")
             items = []
@@ -199,6 +209,9 @@ class LivePlots:
             tips = [("t", "@t_s{0.000} s"), (UNITS[curves[0]][0], f"@{curves[0]}{{0.000}} {UNITS[curves[0]][1]}"),
                     ("GJ", "@gj_nm2{0.0} N m²/rad")]
             fig.add_tools(HoverTool(tooltips=tips, mode="vline", renderers=[r]))
+            fig.vspan(x="t_s", source=self.markers, line_color="#37474f", line_dash="dashed", line_width=1.5)
+            fig.add_layout(LabelSet(x="t_s", y=4, y_units="screen", text="text", source=self.markers,
+                                    text_font_size="11px", text_color="#37474f", x_offset=3))
             if len(curves) == 2:
                 fig.add_layout(Legend(items=items, location="top_left"))
             fig.toolbar.logo = None

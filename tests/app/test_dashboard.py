@@ -89,6 +89,8 @@ def test_fig10_preset_tells_the_papers_story(dash, wait):
     assert v.verdict in ("flutter", "divergence") and 2.0 < v.collapse_time_s < 8.0, v
     assert "softened as scripted at t = 2.0" in dash.status.note.object and "GJ 100 N m²/rad" in dash.status.note.object
     assert (dash.live.frame()["gj_nm2"] == 100.0).any() and (dash.live.frame()["gj_nm2"] == 1500.0).any()
+    marks = dash.live.markers.data  # a vertical marker with the new value in every live plot
+    assert list(marks["text"]) == ["GJ 100"] and abs(marks["t_s"][0] - 2.0) < 0.01
 
 
 def test_table1_shows_the_teeter_beside_the_flight_measurement(dash, wait):
