@@ -17,6 +17,7 @@ from amra_core.boundary import MapSpec
 
 from . import compute, exports
 from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
+from .inputs import checked_input, tooltip
 from .events import Applied, Finished, Fan, Ladder, Locus, ModeFrames, Modes, Notice, Rows
 from .live import LivePlots, columns_from_rows
 from .presets import PRESETS
@@ -30,6 +31,7 @@ from .views.fan import FanView
 from .views.ladder import LadderView
 from .views.map import MapView
 from .views.modes import ModesView
+from .views.help import HelpView
 from .views.rotor import LiveRotor
 from .views.status import StatusView, run_html
 
@@ -248,7 +250,7 @@ class Dashboard(pn.viewable.Viewer):
     # ------------------------------------------------------------------ the page
     def sidebar(self) -> pn.Column:
         c = self.controls
-        explanation = pn.pane.Markdown(pn.bind(lambda p: f"*{PRESETS[p].explanation}*", c.param.preset),
+        explanation = pn.pane.Markdown(pn.bind(lambda p: PRESETS[p].explanation, c.param.preset),
                                        sizing_mode="stretch_width", name="preset-explanation",
                                        styles={"font-size": "90%"})
         upload = pn.widgets.FileInput(accept=".toml", multiple=False, name="Rotor file (TOML)",
@@ -256,25 +258,30 @@ class Dashboard(pn.viewable.Viewer):
         upload.param.watch(lambda e: e.new is not None and self.upload(e.new, upload.filename or "upload.toml"),
                            "value")
 
-        def w(cls, name, **kw):  # the parameter's doc is the tooltip, where the widget has one
-            tip = {"description": c.param[name].doc} if "description" in cls.param else {}
+        def w(cls, name, **kw):  # tooltip: the parameter's doc, unit and allowed range
+            tip = {"description": tooltip(c.param[name])} if "description" in cls.param else {}
             return cls.from_param(c.param[name], **tip, **kw)
-        full, sel, num, slider = {"sizing_mode": "stretch_width"}, pn.widgets.Select, pn.widgets.FloatInput, \
-            pn.widgets.FloatSlider
+
+        def num(name, **kw):  # typed numbers: a bad one gets a message under its input
+            return checked_input(c, name, **kw)
+        full, sel, slider = {"sizing_mode": "stretch_width"}, pn.widgets.Select, pn.widgets.FloatSlider
         button = pn.widgets.Button.from_param
         return pn.Column(
             w(sel, "preset", **full), explanation, w(sel, "rotor", **full), upload,
-            gj_slider(c), w(num, "gj_nm2", css_classes=["amra-gj"], **full),
+            gj_slider(c), num("gj_nm2", css_classes=["amra-gj"], **full),
             w(slider, "ea_pct", **full), w(slider, "cg_pct", **full), w(slider, "mu", **full),
             w(sel, "fidelity", **full),
             pn.Row(w(sel, "aero", width=140), w(sel, "inflow", width=140)),
-            pn.Row(w(num, "run_s", width=140), w(num, "speed", width=140)),
+            pn.Row(num("run_s", width=140, css_classes=["amra-run-s"]), num("speed", width=140,
+                                                                          css_classes=["amra-speed"])),
+            num("soften_at_s", css_classes=["amra-soften"], **full),
             pn.Row(button(c.param.run, button_type="primary", css_classes=["amra-run"]),
                    button(c.param.stop, button_type="warning", css_classes=["amra-stop"]),
                    button(c.param.reset, button_type="light", css_classes=["amra-reset"])),
             button(c.param.ladder, sizing_mode="stretch_width", css_classes=["amra-ladder"]),
-            pn.Card(w(num, "airspeed_m_s"), w(num, "omega_hold_rad_s"), w(pn.widgets.IntInput, "map_columns"),
-                    w(pn.widgets.IntInput, "map_coarse"), title="Advanced: flight and map grid", collapsed=True,
+            pn.Card(num("airspeed_m_s"), num("omega_hold_rad_s"), num("map_columns", widget_cls=pn.widgets.IntInput),
+                    num("map_coarse", widget_cls=pn.widgets.IntInput), title="Advanced: flight and map grid",
+                    collapsed=True,
                     sizing_mode="stretch_width"),
             exports.export_bar(self.history_csv, self.modes.csv, self.map_csv),
             sizing_mode="stretch_width", name="sidebar")
@@ -286,7 +293,8 @@ class Dashboard(pn.viewable.Viewer):
         tabs = pn.Tabs(("Boundary map", self.map if self.map is not None else pn.pane.Markdown("map disabled")),
                        ("Modes & root locus", self.modes), ("Live rotor", self.rotor_view),
                        ("Rotor disc", self.disc), ("Fan plot", self.fan),
-                       ("Fidelity ladder", self.ladder), dynamic=True, sizing_mode="stretch_width", name="views")
+                       ("Fidelity ladder", self.ladder), ("Help", HelpView(self.controls)), dynamic=True,
+                       sizing_mode="stretch_width", name="views")
         # the plots are rendered after the first paint (Panel's defer_load)
         return pn.Column(top, pn.panel(lambda: live, defer_load=True, sizing_mode="stretch_width"),
                          pn.panel(lambda: tabs, defer_load=True, sizing_mode="stretch_width"),

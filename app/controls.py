@@ -65,7 +65,7 @@ class Controls(param.Parameterized):
                                    "in steady autorotation and the GJ above is applied at this time [s], as a live "
                                    "change (the paper's Figs 10-13 are told this way). Must be shorter than the run.")
     speed = param.Number(1.0, bounds=(0.1, 50.0), step=0.1, label="Playback [sim s per s]",
-                         doc="Simulated seconds per wall-clock second while streaming (the solver is faster).")
+                         doc="Playback speed [simulated s per wall-clock s] while streaming (the solver is faster).")
     # -- the map
     map_columns = param.Integer(9, bounds=(2, 31), label="Map CG columns",
                                 doc="Number of CG columns of the boundary map (20-50 % chord).")

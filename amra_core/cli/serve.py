@@ -212,6 +212,9 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
         argv += ["--num-threads", str(s["num_threads"])]
     if setup.is_file():
         argv += ["--setup", str(setup)]
+    report = APP_DIR.parent / "docs" / "validation"
+    if report.is_dir():  # the validation report, linked from the page's help
+        argv += ["--static-dirs", f"validation={report}"]
     for origin in s["origins"]:
         argv += ["--allow-websocket-origin", origin]
     if s["liveness"]:
