@@ -22,6 +22,9 @@ COLOURS = {"rigid": "#1565c0", "fem-torsion": "#ef6c00", "fem-coupled": "#6a1b9a
            "last run": "#1f77b4"}
 
 
+COMPARED = ("previous run", "last run")
+
+
 class LadderView(pn.viewable.Viewer):
     def __init__(self, session, **params):
         super().__init__(**params)
@@ -54,18 +57,20 @@ class LadderView(pn.viewable.Viewer):
     def show(self, result: dict) -> None:
         self.info.object = "Fidelity ladder: the current case at the three fidelities."
         self.pipe.send(result["runs"])
-        self.table.object = pd.DataFrame(result["verdicts"], columns=["fidelity", "verdict", "growth rate [1/s]",
-                                                                      "frequency [Hz]", "collapse time [s]",
-                                                                      "explanation"])
+        self.table.object = verdict_table(result["verdicts"])
 
-    def _plot(self, runs, key, dim, title):
-        layers = [hv.Curve((r["t"], r[key]), DIMS["t_s"], dim, label=fid).opts(
-            color=COLOURS[fid], line_width=2, line_dash="dashed" if fid == "previous run" else "solid")
-            for fid, r in runs.items()]
-        if not layers:
-            layers = [hv.Curve([], DIMS["t_s"], dim)]
+    def _plot(self, runs, key, dim, title, labels=FIDELITIES):
+        # the same layers every time, empty where a run is missing (a DynamicMap draws only the layers
+        # of its first overlay)
+        layers = []
+        for fid in labels:
+            r = runs.get(fid)
+            data = (r["t"], r[key]) if r is not None else ([], [])
+            layers.append(hv.Curve(data, DIMS["t_s"], dim, label=fid).opts(
+                color=COLOURS[fid], line_width=2, line_dash="dashed" if fid == "previous run" else "solid",
+                framewise=True))  # each new set of runs sets the axes (framewise is an element option)
         return hv.Overlay(layers).opts(title=title, responsive=True, height=260, show_grid=True,
-                                       legend_position="top_left")
+                                       legend_position="top_left", framewise=True)
 
     def __panel__(self):
         specs = (("omega", DIMS["omega_rad_s"], "Rotor speed by fidelity"),
@@ -74,12 +79,23 @@ class LadderView(pn.viewable.Viewer):
         plots = [pn.pane.HoloViews(hv.DynamicMap(lambda data, s=s: self._plot(data, *s), streams=[self.pipe]),
                                    sizing_mode="stretch_width") for s in specs]
         compare = [pn.pane.HoloViews(hv.DynamicMap(lambda data, s=s: self._plot(data, s[0], s[1], s[2].replace(
-            "by fidelity", "previous vs last run")), streams=[self.compare_pipe]), sizing_mode="stretch_width")
-            for s in specs]
+            "by fidelity", "previous vs last run"), COMPARED), streams=[self.compare_pipe]),
+            sizing_mode="stretch_width") for s in specs]
         return pn.Column(
             pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"), pn.Row(*compare),
             pn.pane.Markdown("### Fidelity ladder: the same case at the three fidelities"),
             self.info, self.table, pn.Row(*plots), sizing_mode="stretch_width")
+
+
+def _num(x, unit: str = "") -> str:
+    return "—" if x is None or not np.isfinite(x) else f"{x:.3g}{unit}"
+
+
+def verdict_table(rows) -> pd.DataFrame:
+    """The ladder's verdicts, numbers to 3 significant digits, "—" where there is none."""
+    return pd.DataFrame([(fid, verdict, _num(g), _num(f), _num(c), text) for fid, verdict, g, f, c, text in rows],
+                        columns=["fidelity", "verdict", "growth rate [1/s]", "frequency [Hz]", "collapse time [s]",
+                                 "explanation"])
 
 
 def ladder_cases(controls, uploaded) -> dict:
