@@ -14,6 +14,7 @@ import numpy as np
 import panel as pn
 
 from amra_core.boundary import MapSpec
+from amra_core.paper_cases import NOMINAL_GJ_NM2
 
 from . import compute, exports
 from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
@@ -40,6 +41,15 @@ CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", 
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
 REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
+
+
+def case_label(c: Controls, scenario) -> str:
+    """One line naming a run's case, for its verdict card."""
+    flight = f"μ {c.mu:g}" if not c.airspeed_m_s else f"{c.airspeed_m_s:g} m/s"
+    gj = (f"GJ {NOMINAL_GJ_NM2:g} → {c.gj_nm2:.4g} N m²/rad at {c.soften_at_s:g} s" if scenario.changes
+          else f"GJ {c.gj_nm2:.4g} N m²/rad")
+    name = PRESETS[c.preset].label if c.preset != "custom" else c.rotor
+    return f"{name} · {c.fidelity} · {gj} · EA {c.ea_pct:g} % · CG {c.cg_pct:g} % · {flight}"
 
 
 def change_label(values: dict) -> str:
@@ -113,6 +123,9 @@ class Dashboard(pn.viewable.Viewer):
             return False
         self.live.clear()
         self.status.reset()
+        self.messages.clear()  # each run starts with a clean message area
+        self.alert.visible = False
+        self.status.case = case_label(self.controls, scenario)
         self.status.run.object = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
         self._run_preset = self.controls.preset

@@ -32,6 +32,7 @@ from .throttle import Throttle
 
 TICK_S = 0.06  #: wall-clock period of a chunk [s]
 DELIVERY_PERIOD_S = 0.066  #: shortest interval between deliveries to the views [s]: 15 updates/s
+TRIM_PROGRESS_PERIOD_S = 0.5  #: period of the trim's progress line [s]
 VERDICT_PERIOD_S = 1.0  #: wall-clock period of the "so far" verdict and the disc during a run [s]
 log = logging.getLogger("amra.session")
 
@@ -159,8 +160,16 @@ class Session:
         case, post = scenario.case, self.post
         post(RunStatus(run_id, "trimming", "finding the trimmed autorotation ..."))
         try:
-            sim = (self.run_pool.submit(new_simulation, case).result() if self.run_pool is not None
-                   else new_simulation(case))
+            if self.run_pool is not None:
+                fut, t0 = self.run_pool.submit(new_simulation, case), time.perf_counter()
+                while not fut.done():  # the trim's progress: its time so far, twice a second
+                    if stop.wait(TRIM_PROGRESS_PERIOD_S):
+                        return
+                    post(RunStatus(run_id, "trimming", f"finding the trimmed autorotation ... "
+                                                       f"{time.perf_counter() - t0:.0f} s"))
+                sim = fut.result()
+            else:
+                sim = new_simulation(case)
         except Exception as exc:  # noqa: BLE001 - shown in the page, the session carries on
             post(Notice(f"the run could not start: {exc}"))
             post(RunStatus(run_id, "idle", "not started"))

@@ -25,8 +25,9 @@ def _fmt(x, unit, digits=3):
     return "—" if x is None else f"{x:.{digits}g} {unit}"
 
 
-def verdict_html(verdict, final: bool, status: str = "", start_note: str = "") -> str:
-    """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet)."""
+def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", case: str = "") -> str:
+    """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet) of the run
+    of ``case`` (a one-line description)."""
     if verdict is None:
         return ("<div class='amra-verdict' data-verdict='none' style='padding:8px;border-radius:6px;"
                 "background:#eceff1'><b>Verdict:</b> no run yet. Press <i>Run</i>.</div>")
@@ -42,6 +43,7 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "") -
             f"style='padding:8px;border-radius:6px;border-left:8px solid {colour};background:#fafafa'>"
             f"<div style='font-size:130%;color:{colour}'><b>{html.escape(verdict.verdict)}</b> "
             f"<span style='font-size:70%;color:#555'>({state})</span></div>"
+            f"<div class='amra-verdict-case' style='font-size:85%;color:#555'>{html.escape(case)}</div>"
             f"<div>{html.escape(verdict.explanation)}</div><table>{table}</table>{note}</div>")
 
 
@@ -87,6 +89,7 @@ class StatusView(pn.viewable.Viewer):
         session.subscribe(Rows, self._rows)
         session.subscribe(Started, self._started)
         session.subscribe(VerdictNews, lambda ev: self.show(ev.verdict, ev.final, ev.status, ev.start_note))
+        self.case = ""  #: the case of the run the card speaks of (set when a run starts)
         session.subscribe(Applied, self._applied)
 
     def _status(self, ev: RunStatus) -> None:
@@ -115,7 +118,7 @@ class StatusView(pn.viewable.Viewer):
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict
-        self.card.object = verdict_html(verdict, final, status, start_note)
+        self.card.object = verdict_html(verdict, final, status, start_note, self.case)
         if final and status == "numerical-failure":
             self.notify(f"the run failed numerically: {verdict.explanation}")
 

@@ -89,6 +89,8 @@ def test_fig10_preset_tells_the_papers_story(dash, wait):
     assert v.verdict in ("flutter", "divergence") and 2.0 < v.collapse_time_s < 8.0, v
     assert "softened as scripted at t = 2.0" in dash.status.note.object and "GJ 100 N m²/rad" in dash.status.note.object
     assert (dash.live.frame()["gj_nm2"] == 100.0).any() and (dash.live.frame()["gj_nm2"] == 1500.0).any()
+    card = dash.status.card.object  # the card names the case it belongs to
+    assert "Fig. 10: rigid, axial, GJ 100" in card and "GJ 1500 → 100 N m²/rad at 2 s" in card
     marks = dash.live.markers.data  # a vertical marker with the new value in every live plot
     assert list(marks["text"]) == ["GJ 100"] and abs(marks["t_s"][0] - 2.0) < 0.01
 
@@ -198,3 +200,12 @@ def test_the_gj_slider_and_input_are_two_views_of_one_parameter(dash):
 def pn_edit(widget):
     import param
     return param.edit_constant(widget)
+
+
+def test_each_run_starts_with_a_clean_message_area(dash, wait):
+    dash.notify("a message of the last run", "warning")
+    assert dash.alert.visible
+    dash.controls.param.update(run_s=0.5, speed=10.0)
+    dash.start_run()
+    assert dash.messages == [] and not dash.alert.visible
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
