@@ -83,6 +83,7 @@ class Dashboard(pn.viewable.Viewer):
         self.status = StatusView(s, self.notify, doc)
         self.modes, self.disc, self.fan, self.ladder = ModesView(s), DiscView(s), FanView(s, doc), LadderView(s)
         self.rotor_view = LiveRotor(s)
+        self.exports = exports.ExportBar(self.history_csv, self.modes_csv, self.map_csv)
         self.modes.on_pick = self.animate_mode
         self.map = (MapView(registry, who=id(self), on_pick=self.load_cell, doc=doc) if registry is not None
                     else None)
@@ -129,6 +130,7 @@ class Dashboard(pn.viewable.Viewer):
         self.status.run.object = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
         self._run_preset = self.controls.preset
+        self.exports.rename({"history": exports.names_for(self.controls)["history"]})
         return True
 
     def _finished(self, ev) -> None:
@@ -214,6 +216,8 @@ class Dashboard(pn.viewable.Viewer):
         """Recompute the modes, root locus and fan plot; follow the map for the current case."""
         c = self.controls
         self.modes.set_gj(c.gj_nm2)
+        names = exports.names_for(c)
+        self.exports.rename({"modes": names["modes"], "map": names["map"]})
         if self.map is not None:
             self.map.mark(c.cg_pct, c.gj_nm2)
         try:
@@ -242,8 +246,11 @@ class Dashboard(pn.viewable.Viewer):
     # ------------------------------------------------------------------ exports
     def history_csv(self):
         sim = self.session.sim
-        return exports.history_csv(self.last_history if self.last_history is not None else
-                                   (sim.history if sim is not None else None))
+        verdict = self.status.verdict.verdict if self.status.verdict is not None else None
+        return exports.history_csv(sim, self.last_history, verdict)
+
+    def modes_csv(self):
+        return exports.frame_csv(self.modes.frame, exports.controls_meta(self.controls))
 
     def map_csv(self):
         from .views.map import map_csv
@@ -296,7 +303,7 @@ class Dashboard(pn.viewable.Viewer):
                     num("map_coarse", widget_cls=pn.widgets.IntInput), title="Advanced: flight and map grid",
                     collapsed=True,
                     sizing_mode="stretch_width"),
-            exports.export_bar(self.history_csv, self.modes.csv, self.map_csv),
+            self.exports.panel(),
             sizing_mode="stretch_width", name="sidebar")
 
     def main(self) -> pn.Column:

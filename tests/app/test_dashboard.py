@@ -38,7 +38,10 @@ def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     assert dash.status.verdict.verdict == "stable" and "data-final='true'" in dash.status.card.object
     assert "finished" in dash.status.run.object
     csv = dash.history_csv().getvalue().splitlines()
-    assert csv[0] == ",".join(HISTORY_COLUMNS) and len(csv) == len(dash.last_history) + 1
+    meta = [ln for ln in csv if ln.startswith("# ")]
+    assert meta[0].startswith("# AMRA ") and "# fidelity: rigid" in meta and "# verdict: stable" in meta
+    assert csv[len(meta)] == ",".join(HISTORY_COLUMNS) and len(csv) == len(meta) + len(dash.last_history) + 1
+    assert dash.exports.buttons["history"].filename == "amra-paper-boundary-rigid-gj1500-cg40-history.csv"
 
 
 def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
@@ -118,6 +121,9 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
     assert not all(p.trimmed for p in dash.modes.points)  # the fold at low GJ (paper-boundary blade)
     assert "no trim (fold)" in dash.modes.locus_info.object
     assert dash.modes.csv().getvalue().startswith("mode,frequency [Hz]")
+    text = dash.modes_csv().getvalue()
+    assert text.startswith("# AMRA ") and "# gj_nm2: 1500" in text and "\nmode,frequency [Hz]" in text
+    assert dash.exports.buttons["modes"].filename == "amra-paper-boundary-rigid-gj1500-cg40-modes.csv"
     fan = dash.fan.pipe.data
     assert len(fan["modes"]) >= 5
     teeter = dict(fan["modes"])["teeter"]  # the rigid tilt of a teetering rotor is exactly 1/rev
