@@ -306,10 +306,36 @@ class Dashboard(pn.viewable.Viewer):
             self.exports.panel(),
             sizing_mode="stretch_width", name="sidebar")
 
+    def header(self) -> pn.Row:
+        """The header: the presentation toggle, and in presentation mode Run, Stop, a large GJ input and
+        the verdict in one line."""
+        c = self.controls
+        big = {"styles": {"font-size": "20px"}, "stylesheets": [":host input {font-size: 20px; height: 40px}"]}
+        button = pn.widgets.Button.from_param
+        live_bar = pn.Row(
+            button(c.param.run, button_type="primary", css_classes=["amra-present-run"], width=110, height=44,
+                   description=None),
+            button(c.param.stop, button_type="warning", width=110, height=44, description=None),
+            checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, **big),
+            pn.pane.Bokeh(self.status.badge.div, width=360), visible=c.present, margin=0)
+        c.param.watch(lambda e: setattr(live_bar, "visible", e.new), "present")
+        toggle = pn.widgets.Toggle.from_param(c.param.present, button_type="light", width=170,
+                                              css_classes=["amra-present"], margin=(10, 10))
+        return pn.Row(toggle, live_bar, sizing_mode="stretch_width")
+
+    def present(self, on: bool) -> None:
+        """Presentation mode on or off: taller live plots and larger fonts (the header shows Run, Stop,
+        GJ and the verdict; the top status row steps aside)."""
+        self.live.present(on)
+        self.top.visible = not on
+
     def main(self) -> pn.Column:
-        top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"), sizing_mode="stretch_width")
+        self.top = top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"),
+                                sizing_mode="stretch_width", visible=not self.controls.present)
         live = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
                           sizing_mode="stretch_width")
+        self.live.present(self.controls.present)
+        self.controls.param.watch(lambda e: self.present(e.new), "present")
         tabs = pn.Tabs(("Boundary map", self.map if self.map is not None else pn.pane.Markdown("map disabled")),
                        ("Modes & root locus", self.modes), ("Live rotor", self.rotor_view),
                        ("Rotor disc", self.disc), ("Fan plot", self.fan),
@@ -324,5 +350,7 @@ class Dashboard(pn.viewable.Viewer):
         # one root per template area (each root added to a document makes Bokeh recompute its
         # references); no busy indicator (Panel's busy flag is per process: every session's events
         # would spin every page's indicator)
-        return pn.template.BootstrapTemplate(title=TITLE, sidebar=[self.sidebar()], main=[self.main()],
-                                             sidebar_width=330, header_background="#263238", busy_indicator=None)
+        title = "AMRA" if self.controls.present else TITLE  # room for the header's controls on a projector
+        return pn.template.BootstrapTemplate(title=title, sidebar=[self.sidebar()], main=[self.main()],
+                                             header=[self.header()], sidebar_width=330, header_background="#263238",
+                                             busy_indicator=None, collapsed_sidebar=self.controls.present)

@@ -72,6 +72,11 @@ class Controls(param.Parameterized):
     map_coarse = param.Integer(7, bounds=(3, 20), label="Map coarse GJ values",
                                doc="GJ values of the map's coarse grid (30-3000 N m²/rad, log spaced) before bisection.")
 
+    # -- the page
+    present = param.Boolean(False, label="Presentation mode",
+                            doc="For a projector: Run, Stop and a large GJ input in the header, larger fonts, live "
+                                "plots that fill a 1280x720 screen, the sidebar collapsed (link flag present=true).")
+
     # -- actions
     run = param.Event(label="▶ Run", doc="Start a run of the current case (replaces this session's run).")
     stop = param.Event(label="■ Stop", doc="Stop the run; the plots and verdict stay.")

@@ -27,6 +27,8 @@ from tsdownsample import MinMaxDownsampler, NaNMinMaxDownsampler
 from amra_core.simulation import COL
 
 MAX_POINTS = 2000  #: points per curve in the page, at most
+NORMAL_HEIGHT = 220  #: height of a live plot [px]
+PRESENT_HEIGHT = 290  #: in presentation mode: two rows and the header fill a 1280x720 screen [px]
 UNITS = {"t_s": ("Time", "s"), "omega_rad_s": ("Rotor speed Ω", "rad/s"), "teeter_deg": ("Teeter β", "deg"),
          "twist0_deg": ("Tip twist", "deg"), "twist1_deg": ("Tip twist", "deg"),
          "descent_m_s": ("Descent rate", "m/s"), "gj_nm2": ("GJ", "N m²/rad")}
@@ -106,6 +108,7 @@ class LivePlots:
         #: live and scripted changes: time [s] and what changed, drawn as a vertical line in every plot
         self.markers = ColumnDataSource({"t_s": [], "text": []}, name="amra-live-markers")
         self.zoom: tuple | None = None  #: the visible time range [s] while the user has zoomed
+        self.figures_made: list = []
         self.sent_rows = 0  #: rows of the history represented in the plots
         self.last_sent_gj = float("nan")
         self._density = 1.0  #: points per history row of the plots (1: full resolution)
@@ -191,6 +194,15 @@ class LivePlots:
         if event.x0 is not None and event.x1 is not None:
             self.show_range(float(event.x0), float(event.x1))
 
+    def present(self, on: bool) -> None:
+        """Presentation mode: plots tall enough for two rows to fill a 1280x720 screen, larger fonts."""
+        for fig in self.figures_made:
+            fig.height = PRESENT_HEIGHT if on else NORMAL_HEIGHT
+            fig.title.text_font_size = "18px" if on else "13px"
+            for axis in (*fig.xaxis, *fig.yaxis):
+                axis.axis_label_text_font_size = "16px" if on else "13px"
+                axis.major_label_text_font_size = "14px" if on else "11px"
+
     def figures(self) -> list:
         """The four plots, time axis shared (pan or zoom one, all follow)."""
         # the ranges follow the data in the browser (syncable=False: not sent back at each drawing);
@@ -198,7 +210,7 @@ class LivePlots:
         x_range = DataRange1d(only_visible=True, syncable=False)
         out = []
         for (curves, title, colours), src in zip(PLOTS, self.sources):
-            fig = figure(title=title, height=220, sizing_mode="stretch_width", x_range=x_range,
+            fig = figure(title=title, height=NORMAL_HEIGHT, sizing_mode="stretch_width", x_range=x_range,
                          y_range=DataRange1d(only_visible=True, syncable=False, min_interval=MIN_SPAN[curves[0]]),
                          tools="pan,box_zoom,wheel_zoom,reset,save", x_axis_label=label("t_s"),
                          y_axis_label=label(curves[0]), output_backend="canvas")
@@ -218,6 +230,7 @@ class LivePlots:
             out.append(fig)
         # the linked plots all report a zoom: listen to one
         out[0].on_event(RangesUpdate, self._on_ranges)
+        self.figures_made = out
         for fig in out:
             fig.on_event(Reset, lambda event: self.reset())
         return out

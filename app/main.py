@@ -30,9 +30,10 @@ def create_app():
     doc = pn.state.curdoc
     served = doc is not None and doc.session_context is not None
     dash = Dashboard(settings, registry=get_registry(settings), run_pool=get_run_pool() if served else None, doc=doc)
+    if served:  # the link's values first, so the page is built for them (presentation mode)
+        apply_session_query(dash.controls, dash.notify)
     page = dash.__panel__()
     if served:
-        apply_session_query(dash.controls, dash.notify)
 
         def loaded():  # after the first paint
             sync_url(dash.controls)

@@ -68,6 +68,16 @@ class Text(pn.viewable.Viewer):
         return pn.pane.Bokeh(self.div, sizing_mode="stretch_width")
 
 
+def badge_html(verdict, final: bool) -> str:
+    """The verdict in one line, for the header in presentation mode (on its dark background)."""
+    if verdict is None:
+        return "<span style='color:#eceff1;font-size:20px'>no run yet</span>"
+    colour = {"stable": "#a5d6a7"}.get(verdict.verdict, "#ffab91")
+    collapse = f" · Ω collapsed at {verdict.collapse_time_s:.1f} s" if verdict.collapse_time_s is not None else ""
+    return (f"<span style='color:{colour};font-size:22px;font-weight:bold'>{html.escape(verdict.verdict)}</span>"
+            f"<span style='color:#eceff1;font-size:16px'> ({'final' if final else 'so far'}){collapse}</span>")
+
+
 def run_html(text: str) -> str:
     return f"<b>Run:</b> {html.escape(text)}"
 
@@ -78,6 +88,7 @@ class StatusView(pn.viewable.Viewer):
     def __init__(self, session, notify, doc=None, **params):
         super().__init__(**params)
         self.card = Text(verdict_html(None, False), name="verdict")
+        self.badge = Text(badge_html(None, False), name="verdict-badge", css_class="amra-badge")
         self.run = Text(run_html("idle"), name="run-status", css_class="amra-run-status")
         self.note = Text("", name="live-note", css_class="amra-live-note")
         self.verdict = None
@@ -119,6 +130,7 @@ class StatusView(pn.viewable.Viewer):
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict
         self.card.object = verdict_html(verdict, final, status, start_note, self.case)
+        self.badge.object = badge_html(verdict, final)
         if final and status == "numerical-failure":
             self.notify(f"the run failed numerically: {verdict.explanation}")
 
