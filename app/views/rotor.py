@@ -22,7 +22,7 @@ import panel as pn
 from bokeh.models import ColumnDataSource, Range1d
 from bokeh.plotting import figure
 
-FLAP_SCALE = 10.0  #: flap displacement drawn this many times larger than it is [-]
+FLAP_SCALE = 3.0  #: flap displacement drawn this many times larger than it is [-] (coning ~0.3 m at the tip)
 TWIST_SCALE = 10.0  #: elastic twist drawn this many times larger than it is [-]
 BLADE_COLOURS = ("#d62728", "#ff7f0e")  #: blade 0, blade 1 (as the live tip-twist plot)
 
@@ -61,25 +61,26 @@ class RotorDrawing:
     blades [m, rad], teeter [rad])."""
 
     def __init__(self, radius_m: float = 3.81, chord_m: float = 0.197, x_ea: float = 0.32, title: str = "",
-                 flap_scale: float = FLAP_SCALE, twist_scale: float = TWIST_SCALE):
+                 flap_scale: float = FLAP_SCALE, twist_scale: float = TWIST_SCALE, scales: tuple | None = None):
         self.chord_m, self.x_ea = chord_m, x_ea
         self.flap_scale, self.twist_scale = flap_scale, twist_scale
         self.blades = [ColumnDataSource({"x": [], "y": []}) for _ in range(2)]
         self.hub = ColumnDataSource({"x": [], "y": []})
         self.sections = [ColumnDataSource({"x": [], "y": []}) for _ in range(2)]
         reach = 1.05 * radius_m
-        side = figure(title=f"{title}Side view: flap and teeter ×{flap_scale:g}", height=260,
+        flap_note, twist_note = scales or (f"×{flap_scale:g}", f"×{twist_scale:g}")
+        side = figure(title=f"{title}Side view: flap and teeter {flap_note}", height=260,
                       sizing_mode="stretch_width", x_range=Range1d(-reach, reach),
-                      y_range=Range1d(-0.5 * reach, 0.5 * reach), tools="save", toolbar_location="right",
+                      y_range=Range1d(-0.25 * reach, 0.55 * reach), tools="save", toolbar_location="right",
                       x_axis_label="Span position, blade 0 to the right [m]",
-                      y_axis_label=f"Flap displacement ×{flap_scale:g} [m]")
+                      y_axis_label=f"Flap displacement {flap_note} [m]")
         side.line("x", "y", source=self.hub, line_width=6, color="#455a64", legend_label="hub bar")
         for b, (src, colour) in enumerate(zip(self.blades, BLADE_COLOURS)):
             side.line("x", "y", source=src, line_width=4, color=colour, legend_label=f"blade {b}")
         side.legend.location = "top_left"
         side.toolbar.logo = None
         c = 0.8 * chord_m
-        tips = figure(title=f"Tip sections: twist ×{twist_scale:g}", height=260, width=300,
+        tips = figure(title=f"Tip sections: twist {twist_note}", height=260, width=320,
                       x_range=Range1d(-c, c), y_range=Range1d(-c, c), match_aspect=True, tools="save",
                       x_axis_label="Chordwise, leading edge left [m]", y_axis_label="Up [m]")
         for b, (src, colour) in enumerate(zip(self.sections, BLADE_COLOURS)):
@@ -130,7 +131,8 @@ class ModeAnimation(pn.viewable.Viewer):
 
     def __init__(self, **params):
         super().__init__(**params)
-        self.drawing = RotorDrawing(title="Mode. ", flap_scale=0.5, twist_scale=0.5)
+        self.drawing = RotorDrawing(title="Mode. ", flap_scale=1.0, twist_scale=1.0,
+                                    scales=("scaled to be visible", "scaled to be visible"))
         self.frames = None
         self.player = pn.widgets.Player(start=0, end=23, value=0, loop_policy="loop", interval=80, label="Phase",
                                         show_loop_controls=False, visible=False, css_classes=["amra-mode-player"])
