@@ -43,6 +43,15 @@ MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
 REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
 
 
+PAPER_CG = 0.40  #: the paper's CG (Figs 10-13) [chord fraction]: every map has a column there
+
+
+def map_columns(n: int) -> tuple:
+    """``n`` CG columns [chord fractions] from 20 to 50 % chord, always including the paper's 40 %."""
+    cgs = {round(float(x), 4) for x in np.linspace(0.20, 0.50, n)}
+    return tuple(sorted(cgs | {PAPER_CG}))
+
+
 def case_label(c: Controls, scenario) -> str:
     """One line naming a run's case, for its verdict card."""
     flight = f"μ {c.mu:g}" if not c.airspeed_m_s else f"{c.airspeed_m_s:g} m/s"
@@ -186,8 +195,10 @@ class Dashboard(pn.viewable.Viewer):
         return True
 
     def load_cell(self, cell) -> None:
-        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 4), gj_nm2=float(cell.gj_nm2))
-        self.notify(f"loaded map cell CG {100 * cell.cg:.1f} % chord, GJ {cell.gj_nm2:.4g} N m²/rad "
+        gj = float(f"{cell.gj_nm2:.3g}")  # the grid's resolution, not 487.58387005217355
+        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 1), gj_nm2=gj)
+        self.status.show(None, False)  # the card spoke of another case
+        self.notify(f"loaded map cell CG {100 * cell.cg:.1f} % chord, GJ {gj:g} N m²/rad "
                     f"({cell.verdict}); press Run to simulate it", "info")
 
     # ------------------------------------------------------------------ parameter changes
@@ -208,7 +219,7 @@ class Dashboard(pn.viewable.Viewer):
         rotor = self.uploaded if c.rotor == UPLOADED else c.rotor
         if rotor is None:
             raise ValueError("no rotor file uploaded")
-        cgs = tuple(round(float(x), 4) for x in np.linspace(0.20, 0.50, c.map_columns))
+        cgs = map_columns(c.map_columns)
         return MapSpec(rotor=rotor, fidelity=c.fidelity, aero=c.aero, mu=float(c.mu), ea=c.ea_pct / 100.0,
                        cg_values=cgs, gj_min=MAP_GJ_RANGE[0], gj_max=MAP_GJ_RANGE[1], n_coarse=c.map_coarse)
 

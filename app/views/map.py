@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 import panel as pn
 from bokeh.events import Tap
-from bokeh.models import ColumnDataSource, HoverTool, Legend, LegendItem, Range1d
+from bokeh.models import CDSView, ColumnDataSource, GroupFilter, HoverTool, Legend, LegendItem, Range1d
 from bokeh.plotting import figure
 
 from amra_core.boundary import MapSpec, cell_class
@@ -69,6 +69,28 @@ def nearest_cell(cells, cg_pct: float, gj: float):
     return min(cells, key=lambda c: ((100 * c.cg - cg_pct) / dcg) ** 2 + (4 * math.log10(c.gj_nm2 / gj)) ** 2)
 
 
+class Eta:
+    """Time left of a filling map [s], from the rate of computed (not stored) cells so far."""
+
+    def __init__(self):
+        import time
+        self._clock = time.monotonic
+        self._t0 = None
+
+    def update(self, computed: int, remaining: int, running: bool) -> str:
+        """``", about N s left"`` once a few cells were computed while running ('' otherwise)."""
+        if not running or remaining <= 0:
+            return ""
+        if self._t0 is None:
+            self._t0 = (self._clock(), computed)
+            return ""
+        elapsed, done = self._clock() - self._t0[0], computed - self._t0[1]
+        if done < 3 or elapsed <= 0:
+            return ""
+        left = remaining * elapsed / done
+        return f", about {left:.0f} s left" if left < 120 else f", about {left / 60:.0f} min left"
+
+
 def map_csv(cells) -> io.StringIO:
     out = io.StringIO()
     cols = list(CellResult.__dataclass_fields__)
@@ -99,7 +121,8 @@ class MapView(pn.viewable.Viewer):
                                                bar_color="info")
         self.status = Text("Map: waiting ...", name="map-status", css_class="amra-map-status")
         self._lines_key = None
-        self._class_legends: list = []  #: the cell-class legend of each figure built: shown once there are cells
+        self.eta = Eta()
+        self.ea_source = ColumnDataSource({"x": [32.0]})
 
     # -- subscription
     def follow(self, spec: MapSpec) -> None:
@@ -109,6 +132,8 @@ class MapView(pn.viewable.Viewer):
         self.job = self.registry.subscribe(spec, self.who, self.redraw.kick)
         self.seen = 0
         self.cells = []
+        self.eta = Eta()
+        self.ea_source.data = {"x": [100.0 * spec.ea]}
         self._draw(reset=True)
         self.progress.value = 0
         if self.job.state == "busy" and self.doc is not None:  # the queue was full: ask again later
@@ -132,6 +157,7 @@ class MapView(pn.viewable.Viewer):
             self._draw()
         total = max(snap["total"], 1)
         pct = 100 if snap["state"] == "done" else min(99, int(100 * snap["n"] / total))
+        eta = self.eta.update(snap["n"] - snap["cached"], total - snap["n"], snap["state"] == "running")
         if self.progress.value != pct:
             self.progress.value = pct
         spec = self.job.spec
@@ -140,7 +166,7 @@ class MapView(pn.viewable.Viewer):
                  "cancelled": "cancelled", "failed": f"failed: {snap['error']}",
                  "busy": snap["error"]}[snap["state"]]
         text = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
-                f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}")
+                f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}{eta}")
         if snap.get("notice"):  # the store could not be used or written (app.server.queue.open_store)
             text += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
         self.status.object = text  # (a same-text set sends nothing)
@@ -171,9 +197,6 @@ class MapView(pn.viewable.Viewer):
         elif len(self.cells) > self._drawn:
             self.cells_source.stream(_columns(cells_frame(self.cells[self._drawn:])))
         self._drawn = len(self.cells)
-        for legend in self._class_legends:
-            if legend.visible != bool(self.cells):
-                legend.visible = bool(self.cells)
 
     def csv(self) -> io.StringIO:
         return map_csv(self.cells)
@@ -186,9 +209,14 @@ class MapView(pn.viewable.Viewer):
                      y_axis_type="log", x_range=Range1d(18, 52), y_range=Range1d(25, 3600),
                      x_axis_label=CG_LABEL, y_axis_label=GJ_LABEL, tools="pan,wheel_zoom,box_zoom,reset,save",
                      output_backend="canvas", name="map-plot")
-        cells = fig.scatter("cg_pct", "gj_nm2", source=self.cells_source, marker="square", size=11,
-                            color="colour", line_color="colour", legend_field="class")
-        fig.add_tools(HoverTool(renderers=[cells], tooltips=[
+        # one renderer per class, so the legend keeps one order whatever class a map meets first
+        cells, class_items = [], []
+        for cls, colour in CLASS_COLOURS.items():
+            r = fig.scatter("cg_pct", "gj_nm2", source=self.cells_source, marker="square", size=11, color=colour,
+                            view=CDSView(filter=GroupFilter(column_name="class", group=cls)))
+            cells.append(r)
+            class_items.append(LegendItem(label=cls, renderers=[r]))
+        fig.add_tools(HoverTool(renderers=cells, tooltips=[
             ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
             ("verdict", "@verdict"), ("growth rate", "@growth_rate_per_s{0.000} 1/s")]))
         items = []
@@ -199,11 +227,9 @@ class MapView(pn.viewable.Viewer):
         star = fig.scatter("cg_pct", "gj_nm2", source=self.marker_source, marker="star", size=20, color="gold",
                            line_color="black")
         items.append(LegendItem(label="current case", renderers=[star]))
-        classes = fig.legend[0]  # made by legend_field, inside the frame: beside it, above the lines' legend
-        fig.center.remove(classes)
-        classes.location = "top_left"
-        classes.visible = bool(self.cells)  # no empty box before the first cell
-        self._class_legends.append(classes)
+        ea = fig.vspan(x="x", source=self.ea_source, line_color="black", line_width=1.5, line_dash="dotted")
+        items.append(LegendItem(label="elastic axis (EA)", renderers=[ea]))
+        classes = Legend(items=class_items, location="top_left", title="cells")
         fig.add_layout(classes, "right")
         fig.add_layout(Legend(items=items, location="top_left"), "right")
         fig.toolbar.logo = None

@@ -131,19 +131,22 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
 
 
 def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
-    dash.map.figure()
-    classes = dash.map._class_legends[-1]
-    assert not classes.visible  # the cell-class legend: no empty box before the first cell
+    fig = dash.map.figure()
+    from app.views.map import CLASS_COLOURS
+    legends = [[item.label["value"] for item in lg.items] for lg in fig.right]
+    assert legends[0] == list(CLASS_COLOURS)  # the same order whatever class a map meets first
+    assert "elastic axis (EA)" in legends[1] and legends[1][:3] == ["boundary rigid", "boundary fem-torsion",
+                                                                     "boundary fem-coupled"]
     dash.refresh_analyses()
+    assert 0.40 in dash.map.job.spec.cg_values  # the paper's CG is always a column
+    assert dash.map.ea_source.data["x"] == [32.0]  # the EA drawn where it is
     pump_until(dash, lambda: dash.map.job.state == "done" and dash.map.cells, wait, 180, what="the map")
     dash.map.poll()
-    assert classes.visible and len(classes.items) == 1  # one legend_field item, one entry per class
     assert dash.map.progress.value == 100 and "complete" in dash.map.status.object
     cell = dash.map.cells[3]
-    dash.load_cell(cell)
-    assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == cell.gj_nm2
+    dash.load_cell(cell)  # values rounded to the grid's resolution
+    assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == float(f"{cell.gj_nm2:.3g}")
     # the plot holds every cell once, coloured by its class
-    from app.views.map import CLASS_COLOURS
     from amra_core.boundary import cell_class
     data = dash.map.cells_source.data
     assert len(data["cg_pct"]) == len(dash.map.cells)
@@ -152,7 +155,7 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     from types import SimpleNamespace
     other = dash.map.cells[-1]
     dash.map._tapped(SimpleNamespace(x=100 * other.cg + 0.1, y=other.gj_nm2 * 1.001))
-    assert dash.controls.cg_pct == pytest.approx(100 * other.cg) and dash.controls.gj_nm2 == other.gj_nm2
+    assert dash.controls.cg_pct == pytest.approx(100 * other.cg) and dash.controls.gj_nm2 == float(f"{other.gj_nm2:.3g}")
     assert dash.map.csv().getvalue().splitlines()[0].startswith("cg,gj_nm2,verdict")
     assert len(dash.map.csv().getvalue().splitlines()) == len(dash.map.cells) + 1
 
@@ -215,3 +218,23 @@ def test_each_run_starts_with_a_clean_message_area(dash, wait):
     dash.start_run()
     assert dash.messages == [] and not dash.alert.visible
     pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
+
+
+def test_map_columns_always_include_the_papers_cg():
+    from app.app import map_columns
+    for n in (2, 3, 7, 9, 16, 31):
+        cgs = map_columns(n)
+        assert 0.40 in cgs and cgs[0] == 0.20 and cgs[-1] == 0.50 and list(cgs) == sorted(set(cgs))
+
+
+def test_the_map_time_estimate_follows_the_rate_of_computed_cells():
+    from app.views.map import Eta
+    eta, now = Eta(), [100.0]
+    eta._clock = lambda: now[0]
+    assert eta.update(0, 50, True) == ""  # the first look starts the clock
+    now[0] += 10.0
+    assert eta.update(2, 48, True) == ""  # too few cells for a rate
+    assert eta.update(5, 45, True) == ", about 90 s left"  # 5 cells in 10 s: 45 cells in 90 s
+    now[0] += 90.0
+    assert eta.update(5, 45, True) == ", about 15 min left"  # 5 cells in 100 s: 900 s
+    assert eta.update(50, 0, True) == "" and eta.update(5, 45, False) == ""
