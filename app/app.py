@@ -265,7 +265,7 @@ class Dashboard(pn.viewable.Viewer):
 
     def map_csv(self):
         from .views.map import map_csv
-        return map_csv(self.map.cells if self.map is not None else [])
+        return self.map.csv() if self.map is not None else map_csv([], complete=False)
 
     # ------------------------------------------------------------------ lifecycle
     def close(self, *args) -> None:

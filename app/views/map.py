@@ -91,15 +91,18 @@ class Eta:
         return f", about {left:.0f} s left" if left < 120 else f", about {left / 60:.0f} min left"
 
 
-def map_csv(cells) -> io.StringIO:
-    out = io.StringIO()
-    cols = list(CellResult.__dataclass_fields__)
-    w = csv.writer(out)
-    w.writerow(cols)
-    for c in sorted(cells, key=lambda c: (c.cg, c.gj_nm2)):
-        w.writerow(["" if getattr(c, k) is None else getattr(c, k) for k in cols])
-    out.seek(0)
-    return out
+def map_csv(cells, spec=None, complete: bool = True) -> io.StringIO:
+    """The map's cells, CG in % chord as on the page, numbers to 8 digits; the map's case and
+    whether it is complete in ``#`` lines above (a half-finished map says so)."""
+    from amra_core.export import table_csv
+    fields = [k for k in CellResult.__dataclass_fields__ if k != "cg"]
+    meta = {"complete": "yes" if complete else f"NO: {len(cells)} cells so far, the map was still filling"}
+    if spec is not None:
+        meta |= {"fidelity": spec.fidelity, "aero": spec.aero, "ea_pct_chord": 100 * spec.ea, "mu": spec.mu,
+                 "cg_columns_pct_chord": " ".join(f"{100 * c:g}" for c in spec.cg_values)}
+    rows = [[100.0 * c.cg] + ["" if getattr(c, k) is None else getattr(c, k) for k in fields]
+            for c in sorted(cells, key=lambda c: (c.cg, c.gj_nm2))]
+    return io.StringIO(table_csv(["cg_pct_chord", *fields], rows, meta))
 
 
 class MapView(pn.viewable.Viewer):
@@ -199,7 +202,9 @@ class MapView(pn.viewable.Viewer):
         self._drawn = len(self.cells)
 
     def csv(self) -> io.StringIO:
-        return map_csv(self.cells)
+        job = self.job
+        return map_csv(self.cells, job.spec if job is not None else None,
+                       complete=job is not None and job.state == "done")
 
     # -- plot
     def figure(self):

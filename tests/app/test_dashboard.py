@@ -156,8 +156,14 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     other = dash.map.cells[-1]
     dash.map._tapped(SimpleNamespace(x=100 * other.cg + 0.1, y=other.gj_nm2 * 1.001))
     assert dash.controls.cg_pct == pytest.approx(100 * other.cg) and dash.controls.gj_nm2 == float(f"{other.gj_nm2:.3g}")
-    assert dash.map.csv().getvalue().splitlines()[0].startswith("cg,gj_nm2,verdict")
-    assert len(dash.map.csv().getvalue().splitlines()) == len(dash.map.cells) + 1
+    lines = dash.map.csv().getvalue().splitlines()
+    meta = [ln for ln in lines if ln.startswith("# ")]
+    assert "# complete: yes" in meta and "# ea_pct_chord: 32" in meta
+    assert lines[len(meta)].startswith("cg_pct_chord,gj_nm2,verdict")  # CG in % as on the page
+    assert len(lines) == len(meta) + len(dash.map.cells) + 1
+    assert lines[-1].split(",")[0] == f"{100 * max(c.cg for c in dash.map.cells):.8g}"
+    dash.map.job.state = "running"  # a half-finished map says so
+    assert "# complete: NO" in dash.map.csv().getvalue()
 
 
 def test_bad_input_becomes_a_message_and_the_session_keeps_working(dash, wait):
