@@ -57,9 +57,9 @@ def minmax_indices(t: np.ndarray, ys, n_out: int) -> np.ndarray:
     """Sorted row indices keeping each curve's min and max in about ``n_out / 2`` time bins (all rows
     if there are not more than ``n_out``)."""
     n = len(t)
-    n_out = max(4, n_out - n_out % 2)
     if n <= n_out:
         return np.arange(n)
+    n_out = max(4, n_out - n_out % 2)
     keep = [np.array([0, n - 1])]
     for y in ys:
         ds = MinMaxDownsampler() if np.isfinite(y).all() else NaNMinMaxDownsampler()
@@ -128,7 +128,7 @@ class LivePlots:
         if self.zoom is not None:
             return n  # the user looks at a range: it stays as it is until reset
         for i, (src, (curves, _, _)) in enumerate(zip(self.sources, PLOTS)):
-            per_curve = max(4, int(round(n * self._density / len(curves))))
+            per_curve = n if self._density >= 1.0 else max(4, int(round(n * self._density / len(curves))))
             idx = minmax_indices(cols["t_s"], [cols[c] for c in curves], per_curve)
             if self._counts[i] + len(idx) > self.max_points:
                 self._overview()
