@@ -128,6 +128,9 @@ def dashboard_url(dashboard_server):
 @pytest.fixture
 def watched_page(page):
     """The Playwright page with its console errors and outside requests recorded."""
+    # a page on a starved machine (browsers beside the server and other work on two cores) can take
+    # tens of seconds to answer; the tests wait for states, never for a time
+    page.set_default_timeout(120_000)
     page.amra_errors = []
     page.amra_outside = []
     page.on("console", lambda m: m.type == "error" and page.amra_errors.append(m.text))
