@@ -7,7 +7,7 @@ unless a name says otherwise.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 
@@ -110,11 +110,3 @@ class Fan:
 @dataclass(frozen=True)
 class Ladder:
     result: dict  #: app.compute.run_ladder
-
-
-@dataclass(frozen=True)
-class LiveChange:
-    """The user changed GJ/EA/CG during a run (the server's latency clock starts)."""
-    gj_nm2: float
-    received_s: float  #: time.perf_counter() when the change reached the server
-    run_id: Optional[int] = None

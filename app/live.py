@@ -1,17 +1,12 @@
 """The live time histories: rotor speed, teeter, tip twist of both blades and descent rate.
 
-The session keeps every row of the run at full resolution (:class:`History`); the page holds at
-most about :data:`MAX_POINTS` points per curve, a min/max-preserving decimation of it made on the
-server by tsdownsample (``MinMaxDownsampler``: the lowest and highest value of each time bin, so
-no peak of a growing oscillation is lost). New rows are decimated at the density the plot has and
-streamed (``ColumnDataSource.stream``: only the new points travel); when a plot would exceed
-:data:`MAX_POINTS`, its whole window is decimated again to half of that. Zooming (box or wheel
-zoom; Bokeh's ``RangesUpdate`` event, sent only on user interaction) replaces the plots' data with
-the visible time range at full resolution (decimated only if it still has more rows than
-:data:`MAX_POINTS`); the toolbar's reset returns to the whole run, which follows the stream again.
-
-Each plot has its own source (columns ``t_s``, its curves, and ``gj_nm2``: the GJ each row was
-computed with, so a mid-run change is visible in the data and in the rotor-speed hover).
+The session keeps every row of the run (:class:`History`); the page holds at most
+:data:`MAX_POINTS` points per plot, a min/max-preserving decimation made on the server with
+tsdownsample (lowest and highest value per time bin: no peak of an oscillation is lost). New rows
+are decimated at the plot's current density and streamed (only new points travel); a plot that
+would exceed :data:`MAX_POINTS` is decimated again to half of it. A zoom (Bokeh's ``RangesUpdate``,
+sent only on user interaction) shows the visible range at full resolution; reset shows the whole
+run again. Each plot's source has ``t_s``, its curves and ``gj_nm2`` (the GJ of each row).
 """
 from __future__ import annotations
 
@@ -62,9 +57,9 @@ def minmax_indices(t: np.ndarray, ys, n_out: int) -> np.ndarray:
     """Sorted row indices keeping each curve's min and max in about ``n_out / 2`` time bins (all rows
     if there are not more than ``n_out``)."""
     n = len(t)
-    n_out = max(4, n_out - n_out % 2)
     if n <= n_out:
         return np.arange(n)
+    n_out = max(4, n_out - n_out % 2)
     keep = [np.array([0, n - 1])]
     for y in ys:
         ds = MinMaxDownsampler() if np.isfinite(y).all() else NaNMinMaxDownsampler()
@@ -137,7 +132,7 @@ class LivePlots:
         if self.zoom is not None:
             return n  # the user looks at a range: it stays as it is until reset
         for i, (src, (curves, _, _)) in enumerate(zip(self.sources, PLOTS)):
-            per_curve = max(4, int(round(n * self._density / len(curves))))
+            per_curve = n if self._density >= 1.0 else max(4, int(round(n * self._density / len(curves))))
             idx = minmax_indices(cols["t_s"], [cols[c] for c in curves], per_curve)
             if self._counts[i] + len(idx) > self.max_points:
                 self._overview()

@@ -47,6 +47,11 @@ def create_app():
 
 
 if __name__.startswith("bokeh"):
-    create_app().servable(title=TITLE)
+    import logging
+    import time
+
+    t0 = time.perf_counter()
+    create_app().servable(title=TITLE)  # the page's Bokeh models are built here
+    logging.getLogger("amra.page").info("page built in %.3f s (server time)", time.perf_counter() - t0)
 elif __name__ == "__main__":
     pn.serve(create_app, port=5006, address="127.0.0.1", show=False)

@@ -1,16 +1,12 @@
 """One browser session's run: the thread that advances it, and the news it hands to the views.
 
-:class:`Session` owns the run thread. The thread trims the case (in the run process pool: the
-trim holds the GIL), then advances the :class:`~amra_core.simulation.Simulation` in short chunks
-paced to the playback speed, and posts typed events (:mod:`app.events`). Views subscribe to the
-event types they draw (:meth:`Session.subscribe`); :meth:`Session.deliver` hands them over on the
-session's event loop, at most :data:`DELIVERY_PERIOD_S` apart (:class:`app.throttle.Throttle`),
-with consecutive rows joined into one batch. Nothing waits for a thread on the event loop:
-:meth:`start`, :meth:`stop` and :meth:`close` only signal; an old run's late events are dropped
-by their run id. The Simulation keeps the full-resolution history (CSV export).
-
-Apply live: :meth:`set_live` queues new GJ/EA/CG; the thread calls ``Simulation.set_parameters``
-between chunks and the run continues from its state.
+The run thread trims the case (in the run process pool: the trim holds the GIL), advances the
+:class:`~amra_core.simulation.Simulation` in chunks paced to the playback speed, applies live
+GJ/EA/CG changes between chunks (``set_parameters``: the run continues from its state) and posts
+typed events (:mod:`app.events`). Views subscribe to the event types they draw; :meth:`deliver`
+hands them over on the event loop at most :data:`DELIVERY_PERIOD_S` apart, consecutive rows
+joined. :meth:`start`, :meth:`stop` and :meth:`close` only signal, never wait for a thread; a
+replaced run's late events are dropped by run id.
 """
 from __future__ import annotations
 
@@ -31,7 +27,7 @@ from .events import Applied, Disc, Finished, Notice, Pose, Rows, RunStatus, Star
 from .throttle import Throttle
 
 TICK_S = 0.06  #: wall-clock period of a chunk [s]
-DELIVERY_PERIOD_S = 0.066  #: shortest interval between deliveries to the views [s]: 15 updates/s
+DELIVERY_PERIOD_S = 0.1  #: shortest interval between deliveries to the views [s]: 10 updates/s
 TRIM_PROGRESS_PERIOD_S = 0.5  #: period of the trim's progress line [s]
 VERDICT_PERIOD_S = 1.0  #: wall-clock period of the "so far" verdict and the disc during a run [s]
 log = logging.getLogger("amra.session")

@@ -1,14 +1,10 @@
-"""The one rate limiter of the app: run a function on the session's event loop, soon after it is
-asked for, at most once per period, and never while nobody asks.
+"""The one rate limiter of the app: run a function on the session's event loop soon after it is
+asked for, at most once per period, and never while nobody asks (no periodic callback).
 
-``kick()`` may be called from any thread (the run thread, a map job, a pool callback) as often as
-it likes; kicks during a wait coalesce into one call. The call is scheduled with Bokeh's
-``add_next_tick_callback`` (the one Document method documented as safe from other threads) and
-runs through ``pn.state.execute`` with the document lock held, so the function may change any
-model. Nothing is scheduled while nothing kicks: no periodic callback runs in an idle session.
-
-Without a served document (tests, scripts), kicks only mark the work as due and :meth:`run_due`
-runs it in the caller's thread.
+``kick()`` may be called from any thread, as often as it likes; kicks during a wait coalesce.
+The call goes through ``pn.state.execute`` (a next-tick callback with the document lock held),
+so the function may change any model. Without a served document (tests, scripts) a kick only
+marks the work as due, and :meth:`run_due` runs it in the caller's thread.
 """
 from __future__ import annotations
 

@@ -10,6 +10,10 @@ if __name__ in ("panel_setup_module", "__main__"):
     import logging
     import os
 
+    import holoviews as hv
+
+    import app.app  # noqa: F401 - the page's modules, imported once here rather than in the first session
+
     from app.compute import warm, warm_worker
     from app.server.map_jobs import get_registry
     from app.server.pool import get_analysis_pool, get_run_pool
@@ -21,4 +25,5 @@ if __name__ in ("panel_setup_module", "__main__"):
     get_registry(ServerSettings.from_env())
     get_analysis_pool().submit(warm_worker)  # start and warm the pool processes too
     get_run_pool().submit(warm_worker)
+    hv.extension("bokeh", logo=False)
     print(f"AMRA warm-up: kernels ready in {warm():.1f} s", flush=True)

@@ -34,9 +34,7 @@ The basic-auth file is JSON, ``{"user": "password", ...}`` (a password is never 
 command line, where ``ps`` shows it). Secrets reach Panel through its environment, not its argv.
 
 The app reads its settings from the environment of the server process: ``AMRA_STORE``,
-``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S`` (and, passed through unchanged,
-``AMRA_STREAM_PERIOD_MS``: each session's page-update period [ms], default 25; and
-``AMRA_STREAM_BUDGET_HZ``: live-plot updates per second for the whole server, default 160).
+``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S``.
 """
 from __future__ import annotations
 

@@ -27,7 +27,7 @@ CACHE_KEY = "amra-map-registry"
 
 
 class MapJob:
-    """One map computation in its own thread; sessions poll :meth:`snapshot`."""
+    """One map computation in its own thread; subscribers are called back on each change and read :meth:`snapshot`."""
 
     def __init__(self, spec: MapSpec, registry: "MapRegistry"):
         self.spec = spec

@@ -38,7 +38,7 @@ CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "
                  "failed": "#212121"}
 FIDELITY_STYLE = {"rigid": ("#1565c0", "solid"), "fem-torsion": ("#ef6c00", "dashed"),
                   "fem-coupled": ("#6a1b9a", "dotdash")}
-REDRAW_S = 0.5  #: shortest wall-clock period between redraws of the map [s]
+REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the map [s]
 BUSY_RETRY_MS = 5000  #: a map refused as "server busy" is asked for again after this [ms]
 
 

@@ -1,7 +1,7 @@
 """Stability at a glance: the trimmed state's modes (table) and the root locus over GJ.
 
 The table lists the eigenvalues (axial) or Floquet exponents (forward) of the current case, from
-``amra_core.stability.analyse``; the root locus plots the modes of :func:`app.locus.walk` along GJ
+``amra_core.stability.analyse``; the root locus plots the modes of :func:`app.compute.walk` along GJ
 for the current CG, coloured by GJ, the current GJ marked, and beside it the largest real part
 against GJ, so the flutter crossing (real part through zero) or the fold (the trim branch ends)
 is visible before any run.

@@ -15,7 +15,7 @@ from bokeh.models import Div
 from ..events import Applied, Rows, RunStatus, Started, VerdictNews
 from ..throttle import Throttle
 
-CLOCK_PERIOD_S = 0.5  #: shortest interval between updates of the run clock [s]
+CLOCK_PERIOD_S = 1.0  #: shortest interval between updates of the run clock [s]
 
 COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "divergence": "#ef6c00", "overspeed": "#6a1b9a",
            "no-autorotation": "#5d4037", "numerical-failure": "#424242"}
