@@ -116,7 +116,7 @@ class Session:
             self._pending, self._speed = {}, float(speed)
             self._stop = stop = threading.Event()
             run_id = self.run_id
-        self._thread = threading.Thread(target=self._loop, args=(Scenario(case, tuple(changes)), run_id, stop),
+        self._thread = threading.Thread(target=self._loop, args=(case, tuple(changes), run_id, stop),
                                         name=f"amra-run-{run_id}", daemon=True)
         self._thread.start()
         return run_id
@@ -152,10 +152,11 @@ class Session:
             pend, self._pending = self._pending, {}
             return pend, self._speed
 
-    def _loop(self, scenario: Scenario, run_id: int, stop: threading.Event) -> None:
-        case, post = scenario.case, self.post
+    def _loop(self, case: Case, changes: tuple, run_id: int, stop: threading.Event) -> None:
+        post = self.post
         post(RunStatus(run_id, "trimming", "finding the trimmed autorotation ..."))
         try:
+            scenario = Scenario(case, changes)
             if self.run_pool is not None:
                 fut, t0 = self.run_pool.submit(new_simulation, case), time.perf_counter()
                 while not fut.done():  # the trim's progress: its time so far, twice a second
