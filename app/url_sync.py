@@ -120,4 +120,8 @@ def sync_url(controls: param.Parameterized) -> None:
     import panel as pn
     loc = pn.state.location
     if loc is not None:
-        loc.sync(controls, dict(URL_KEYS), on_error=lambda bad: None)
+        # every value but the preset: Location.sync applies the link's values in one batch, after
+        # which the preset's watcher would overwrite the edits (?preset=nominal&gj=100 opened at
+        # GJ 1500); the values alone reproduce the case, and a link's preset was applied first
+        # by apply_session_query
+        loc.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"}, on_error=lambda bad: None)

@@ -226,7 +226,7 @@ def test_a_dragged_slider_sends_its_value_once_on_release(watched_page, dashboar
 def test_fig10_preset_ends_unstable(watched_page, dashboard_url):
     page = watched_page
     open_dashboard(page, dashboard_url + "?preset=fig10&run_s=6&speed=6")
-    expect(page.get_by_text("Paper Fig. 10").first).to_be_visible(timeout=30_000)
+    expect(page.get_by_text("The paper:").first).to_be_visible(timeout=30_000)
     page.locator(".amra-run button").click()
     card = page.locator(".amra-verdict[data-final='true']")
     expect(card).to_be_visible(timeout=90_000)
@@ -255,7 +255,7 @@ def test_map_fills_in_and_clicking_a_cell_loads_it(watched_page, dashboard_serve
     xy = plot_point(page, "Stability boundary map", 100 * target.cg, target.gj_nm2)
     assert xy is not None
     page.mouse.click(*xy)
-    wait_for(lambda: d.controls.gj_nm2 == target.gj_nm2, 20, what="the clicked cell to load")
+    wait_for(lambda: d.controls.gj_nm2 == float(f"{target.gj_nm2:.3g}"), 20, what="the clicked cell to load")
     assert d.controls.cg_pct == pytest.approx(100 * target.cg)
     expect(page.get_by_text("loaded map cell").first).to_be_visible(timeout=10_000)
     shot(page, "06-map-cell-loaded")
