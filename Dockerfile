@@ -42,16 +42,17 @@ RUN useradd --create-home --uid 1000 --user-group amra \
 
 WORKDIR /opt/amra
 
-# Dependencies first, in their own layer, read from pyproject.toml (runtime + the dask extra):
-# rebuilt only when pyproject.toml changes. PIP_INDEX_URL / PIP_EXTRA_INDEX_URL: optional build
+# Dependencies first, in their own layer, read from pyproject.toml (runtime + the dask extra) at
+# the exact versions of constraints.txt (those the tests passed on): rebuilt only when either
+# changes. PIP_INDEX_URL / PIP_EXTRA_INDEX_URL: optional build
 # args for a package mirror (scripts/build_image.sh passes the host pip configuration's).
 ARG PIP_INDEX_URL
 ARG PIP_EXTRA_INDEX_URL
-COPY pyproject.toml ./
+COPY pyproject.toml constraints.txt ./
 RUN python3 -c "import tomllib; p = tomllib.load(open('pyproject.toml', 'rb'))['project']; \
 print('\n'.join(p['dependencies'] + p['optional-dependencies']['dask'] + ['setuptools>=64', 'wheel']))" \
         > /tmp/requirements.txt \
-    && pip install -r /tmp/requirements.txt \
+    && pip install -c constraints.txt -r /tmp/requirements.txt \
     && rm /tmp/requirements.txt
 
 # The project itself, editable (the solver finds assets/ next to the package), owned by root:

@@ -52,16 +52,29 @@ def _check_number(name: str, value, lo=None, hi=None, lo_open=False, hi_open=Fal
     return v
 
 
+#: the largest tip radius allowed [m] (no rotorcraft blade is longer; the largest is ~17 m)
+MAX_RADIUS_M = 50.0
+#: upper bounds of the station magnitudes: orders of magnitude beyond any rotor blade (a heavy
+#: helicopter blade is ~10-50 kg/m, GJ and EI up to ~1e6 N m^2), so that a typing slip such as
+#: 1e308 is named as such instead of overflowing in the section checks or the kernels
+MAX_SECTION_MASS_KG_M = 1e4
+MAX_SECTION_INERTIA_KG_M = 1e3
+MAX_STIFFNESS_NM2 = 1e10
+
+#: the largest hub inertia allowed [kg m^2] (a 50 m rotor's blades are ~1e6 kg m^2; a hub is far less)
+MAX_HUB_INERTIA_KG_M2 = 1e6
+
 #: Station fields: name -> (lower bound, lower bound open?, upper bound, unit/meaning)
 STATION_FIELDS = {
-    "r_m": (0.0, False, None, "radius from the rotor axis [m]"),
-    "chord_m": (0.0, True, None, "chord [m]"),
+    "r_m": (0.0, False, MAX_RADIUS_M, "radius from the rotor axis [m]"),
+    "chord_m": (0.0, True, MAX_CHORD_FRACTION * MAX_RADIUS_M, "chord [m]"),
     "twist_rad": (-math.pi / 4, False, math.pi / 4, "built-in twist, nose-up positive [rad]"),
-    "mass_kg_m": (0.0, True, None, "mass per length [kg/m]"),
-    "torsional_inertia_kg_m": (0.0, True, None, "torsional inertia per length about the EA [kg m^2/m]"),
-    "gj_nm2": (0.0, True, None, "torsional stiffness [N m^2/rad]"),
-    "ei_flap_nm2": (0.0, True, None, "flapwise bending stiffness [N m^2]"),
-    "ei_lag_nm2": (0.0, True, None, "lagwise bending stiffness [N m^2]"),
+    "mass_kg_m": (0.0, True, MAX_SECTION_MASS_KG_M, "mass per length [kg/m]"),
+    "torsional_inertia_kg_m": (0.0, True, MAX_SECTION_INERTIA_KG_M,
+                               "torsional inertia per length about the EA [kg m^2/m]"),
+    "gj_nm2": (0.0, True, MAX_STIFFNESS_NM2, "torsional stiffness [N m^2/rad]"),
+    "ei_flap_nm2": (0.0, True, MAX_STIFFNESS_NM2, "flapwise bending stiffness [N m^2]"),
+    "ei_lag_nm2": (0.0, True, MAX_STIFFNESS_NM2, "lagwise bending stiffness [N m^2]"),
     "x_ea": (0.0, False, 1.0, "elastic axis [fraction of chord from the leading edge]"),
     "x_cg": (0.0, False, 1.0, "centre of gravity [fraction of chord from the leading edge]"),
     "x_ac": (0.0, False, 1.0, "aerodynamic centre [fraction of chord from the leading edge]"),
@@ -164,7 +177,7 @@ class PointMass:
 
     def validate(self, radius_m: float, root_m: float):
         _check_number("point_mass.r_m", self.r_m, root_m, radius_m)
-        _check_number("point_mass.mass_kg", self.mass_kg, 0.0, None)
+        _check_number("point_mass.mass_kg", self.mass_kg, 0.0, 1e4)
         _check_number("point_mass.x_chord", self.x_chord, 0.0, 1.0)
 
 
@@ -199,7 +212,7 @@ class Rotor:
             _fail("name", self.name, "must be a non-empty text of at most 200 characters")
         if not isinstance(self.stations, BladeStations):
             _fail("stations", self.stations, "must be BladeStations")
-        R = _check_number("radius_m", self.radius_m, 0.0, 50.0, lo_open=True)
+        R = _check_number("radius_m", self.radius_m, 0.0, MAX_RADIUS_M, lo_open=True)
         r0 = _check_number("root_cutout_m", self.root_cutout_m, 0.0, 0.8 * R, hi_open=True)
         if isinstance(self.n_blades, bool) or not isinstance(self.n_blades, (int, np.integer)) or self.n_blades != 2:
             _fail("n_blades", self.n_blades, "must be the integer 2 (AMRA models a two-bladed teetering rotor)")
@@ -219,8 +232,8 @@ class Rotor:
             _fail("point_mass", self.point_mass, "must be a PointMass (r_m, mass_kg, x_chord)")
         _check_number("incidence_rad", self.incidence_rad, -math.radians(20), math.radians(20))
         _check_number("vehicle_mass_kg", self.vehicle_mass_kg, 0.0, 1e5, lo_open=True)
-        _check_number("hub_teeter_inertia_kg_m2", self.hub_teeter_inertia_kg_m2, 0.0, None)
-        _check_number("hub_polar_inertia_kg_m2", self.hub_polar_inertia_kg_m2, 0.0, None)
+        _check_number("hub_teeter_inertia_kg_m2", self.hub_teeter_inertia_kg_m2, 0.0, MAX_HUB_INERTIA_KG_M2)
+        _check_number("hub_polar_inertia_kg_m2", self.hub_polar_inertia_kg_m2, 0.0, MAX_HUB_INERTIA_KG_M2)
         _check_number("structural_damping_ratio", self.structural_damping_ratio, 0.0, 0.2)
         r = self.stations.r_m
         if abs(r[0] - r0) > 1e-9:
@@ -244,9 +257,10 @@ class Rotor:
         n = len(self.stations.r_m)
         changes = {}
         if gj_nm2 is not None:
-            changes["gj_nm2"] = (_check_number("gj_nm2", gj_nm2, 0.0, None, lo_open=True),) * n
+            changes["gj_nm2"] = (_check_number("gj_nm2", gj_nm2, 0.0, MAX_STIFFNESS_NM2, lo_open=True),) * n
         if ei_flap_nm2 is not None:
-            changes["ei_flap_nm2"] = (_check_number("ei_flap_nm2", ei_flap_nm2, 0.0, None, lo_open=True),) * n
+            changes["ei_flap_nm2"] = (_check_number("ei_flap_nm2", ei_flap_nm2, 0.0, MAX_STIFFNESS_NM2,
+                                                    lo_open=True),) * n
         if x_ea is not None:
             changes["x_ea"] = (_check_number("ea (x_ea)", x_ea, 0.0, 1.0),) * n
         if x_cg is not None:

@@ -350,8 +350,13 @@ class Simulation:
             self._change_trim = (n, trim(self.model))
         return self._change_trim[1]
 
-    def to_csv(self, path) -> None:
-        np.savetxt(path, self.history, delimiter=",", header=",".join(HISTORY_COLUMNS), comments="")
+    def to_csv(self, path, verdict: Optional[str] = None) -> None:
+        """The full-resolution history, with the case, its live changes and the solver version in
+        ``#`` header lines (:mod:`amra_core.export`)."""
+        from .export import case_meta, table_csv
+        meta = case_meta(self.case, [what for _, _, what in self.changes], verdict)
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(table_csv(HISTORY_COLUMNS, self.history, meta))
 
     def _apply_perturbation(self, p: Perturbation) -> None:
         x, xd = self.model.physical(self.y)

@@ -1,14 +1,19 @@
-"""Classroom presets: the seed paper's cases (Figs 10-13, Table 1) and the nominal blades.
+"""Classroom presets: the seed paper's cases (Figs 10-13, Table 1) and the nominal blade.
 
-Each preset is a set of control values (see :class:`app.controls.Controls`) with a one-line
-explanation shown under the selector. Figs 10-13 use the ``paper-boundary`` rotor (EA 32 %,
-CG 40 % chord); the paper does not give the forward speed of Figs 12-13, so mu = 0.1 is used (as in
-``tests/core/test_system.py``). Table 1 holds the rotor speed at the measured mean in level flight.
+Each preset is a set of control values (see :class:`app.controls.Controls`) with a card text
+shown under the selector. Figs 10-13 tell the paper's story (:mod:`amra_core.paper_cases`): the
+paper-boundary blade (EA 32 %, CG 40 % chord) starts in steady autorotation at its nominal GJ and
+is softened to the figure's GJ at t = 2 s (``soften_at_s``), as a live change does; in this model
+no steady autorotation exists at the figures' GJ at all. The paper does not give the forward speed
+of Figs 12-13; μ = 0.1 is assumed. Table 1 holds the rotor speed at the measured mean in level
+flight and compares the teeter amplitude with the flight measurement and the original AMRA.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 from types import MappingProxyType
+
+from amra_core.paper_cases import PAPER_CASES
 
 
 @dataclass(frozen=True)
@@ -16,17 +21,37 @@ class Preset:
     label: str
     explanation: str
     values: tuple  #: ((control name, value), ...)
+    #: Table 1: (measured teeter amplitude [rad], the original AMRA's [rad]) to show beside the run's
+    teeter_reference_rad: tuple | None = None
 
     def as_dict(self) -> dict:
         return dict(self.values)
 
 
-_BASE = (("airspeed_m_s", 0.0), ("omega_hold_rad_s", 0.0), ("aero", "theodorsen"), ("inflow", "uniform"))
+_BASE = (("airspeed_m_s", 0.0), ("omega_hold_rad_s", 0.0), ("aero", "theodorsen"), ("inflow", "uniform"),
+         ("soften_at_s", 0.0))
 
 
-def _p(label, explanation, **values):
+def _p(label, explanation, teeter_reference_rad=None, **values):
     merged = dict(_BASE) | values
-    return Preset(label, explanation, tuple(merged.items()))
+    return Preset(label, explanation, tuple(merged.items()), teeter_reference_rad)
+
+
+def _paper(key: str) -> Preset:
+    pc = PAPER_CASES[key]
+    text = f"**The paper:** {pc.paper_reports}.\n\n**This model:** {pc.model_gives}"
+    return _p(pc.label, text, rotor="paper-boundary", gj_nm2=pc.gj_nm2, ea_pct=32.0, cg_pct=40.0, mu=pc.mu,
+              fidelity=pc.fidelity, run_s=pc.run_s, soften_at_s=pc.soften_at_s)
+
+
+def _table1(case: str, speed_m_s: float, omega: float, measured: float, amra: float) -> Preset:
+    text = (f"Paper Table 1 case {case}: McCutcheon rotor (GJ, EA, CG at their span means), rotor speed held "
+            f"at {omega:g} rad/s, level flight at {speed_m_s:g} m/s. **Teeter amplitude:** measured in flight "
+            f"{measured:g} rad, original AMRA {amra:g} rad; this model's is shown when the run ends. With the "
+            f"rotor speed held, the verdict only says whether the kick dies out.")
+    return _p(f"Table 1 {case}: G-UNIV, {speed_m_s:g} m/s, Ω {omega:g} rad/s", text, (measured, amra),
+              rotor="mccutcheon", gj_nm2=1471.0, ea_pct=31.4, cg_pct=33.0, mu=0.0, airspeed_m_s=speed_m_s,
+              omega_hold_rad_s=omega, fidelity="rigid", run_s=5.0)
 
 
 PRESETS = MappingProxyType({
@@ -34,26 +59,7 @@ PRESETS = MappingProxyType({
     "nominal": _p("Nominal blade, axial", "Paper-boundary blade at its nominal GJ 1500 N m²/rad: stable steady "
                   "autorotation; the kick decays.", rotor="paper-boundary", gj_nm2=1500.0, ea_pct=32.0,
                   cg_pct=40.0, mu=0.0, fidelity="rigid", run_s=10.0),
-    "fig10": _p("Fig. 10: rigid, axial, GJ 100", "Paper Fig. 10: a soft blade (GJ 100 N m²/rad) twists nose-up "
-                "until drag wins; no autorotation exists and the rotor speed runs down.", rotor="paper-boundary",
-                gj_nm2=100.0, ea_pct=32.0, cg_pct=40.0, mu=0.0, fidelity="rigid", run_s=10.0),
-    "fig11": _p("Fig. 11: FEM coupled, axial, GJ 400", "Paper Fig. 11: the flexible (FEM flap-torsion) blade at "
-                "GJ 400 N m²/rad loses its autorotation: rotor speed falls, descent rate rises.",
-                rotor="paper-boundary", gj_nm2=400.0, ea_pct=32.0, cg_pct=40.0, mu=0.0, fidelity="fem-coupled",
-                run_s=10.0),
-    "fig12": _p("Fig. 12: rigid, forward (μ 0.1), GJ 300", "Paper Fig. 12 in forward flight (μ = 0.1 assumed): the "
-                "rigid-blade model at GJ 300 N m²/rad is unstable.", rotor="paper-boundary", gj_nm2=300.0,
-                ea_pct=32.0, cg_pct=40.0, mu=0.1, fidelity="rigid", run_s=10.0),
-    "fig13": _p("Fig. 13: FEM coupled, forward (μ 0.1), GJ 600", "Paper Fig. 13 in forward flight (μ = 0.1 "
-                "assumed): the FEM blade at GJ 600 N m²/rad is already unstable: flexibility lowers the "
-                "boundary's safety margin.", rotor="paper-boundary", gj_nm2=600.0, ea_pct=32.0, cg_pct=40.0,
-                mu=0.1, fidelity="fem-coupled", run_s=10.0),
-    "table1a": _p("Table 1 A: G-UNIV, 14 m/s, Ω 38 rad/s", "Paper Table 1 case A: McCutcheon rotor (GJ, EA, CG "
-                  "at their span means), rotor speed held at 38 rad/s, level flight at 14 m/s; measured teeter "
-                  "0.031 rad.", rotor="mccutcheon", gj_nm2=1471.0, ea_pct=31.4, cg_pct=33.0, mu=0.0, airspeed_m_s=14.0, omega_hold_rad_s=38.0,
-                  fidelity="rigid", run_s=5.0),
-    "table1b": _p("Table 1 B: G-UNIV, 27 m/s, Ω 41 rad/s", "Paper Table 1 case B: as A at 27 m/s and 41 rad/s; "
-                  "measured teeter 0.058 rad (larger at the higher speed).", rotor="mccutcheon", gj_nm2=1471.0,
-                  ea_pct=31.4, cg_pct=33.0, mu=0.0, airspeed_m_s=27.0, omega_hold_rad_s=41.0, fidelity="rigid",
-                  run_s=5.0),
+    **{key: _paper(key) for key in ("fig10", "fig11", "fig12", "fig13")},
+    "table1a": _table1("A", 14.0, 38.0, 0.031, 0.026),
+    "table1b": _table1("B", 27.0, 41.0, 0.058, 0.056),
 })

@@ -16,12 +16,19 @@ import param
 #: control name -> URL key
 URL_KEYS = {"preset": "preset", "rotor": "rotor", "gj_nm2": "gj", "ea_pct": "ea", "cg_pct": "cg", "mu": "mu",
             "airspeed_m_s": "v", "omega_hold_rad_s": "omega_hold", "fidelity": "fidelity", "aero": "aero",
-            "inflow": "inflow", "run_s": "run_s", "speed": "speed", "map_columns": "map_columns",
+            "inflow": "inflow", "run_s": "run_s", "soften_at_s": "soften_at", "speed": "speed", "present": "present", "map_columns": "map_columns",
             "map_coarse": "map_coarse"}
 _BY_KEY = {v: k for k, v in URL_KEYS.items()}
 
 
 def _coerce(p: param.Parameter, name: str, raw):
+    if isinstance(p, param.Boolean):
+        text = str(raw).strip().lower()
+        if text in ("1", "true", "yes", "on"):
+            return True
+        if text in ("0", "false", "no", "off"):
+            return False
+        raise ValueError(f"{name} = {raw!r} is not allowed: must be true or false")
     if isinstance(p, param.Integer):
         if isinstance(raw, float) and raw.is_integer():
             raw = int(raw)
@@ -59,6 +66,8 @@ def apply_query(controls: param.Parameterized, query: dict) -> list:
                 allowed = f" (allowed {p.bounds[0]:g} to {p.bounds[1]:g})"
             elif isinstance(p, param.Selector):
                 allowed = f" (allowed: {', '.join(map(str, p.objects))})"
+            elif isinstance(p, param.Boolean):
+                allowed = " (allowed: true or false)"
             errors.append(f"link parameter {key} = {raw!r} was ignored{allowed}: {_short(exc)}")
     return errors
 
@@ -111,4 +120,8 @@ def sync_url(controls: param.Parameterized) -> None:
     import panel as pn
     loc = pn.state.location
     if loc is not None:
-        loc.sync(controls, dict(URL_KEYS), on_error=lambda bad: None)
+        # every value but the preset: Location.sync applies the link's values in one batch, after
+        # which the preset's watcher would overwrite the edits (?preset=nominal&gj=100 opened at
+        # GJ 1500); the values alone reproduce the case, and a link's preset was applied first
+        # by apply_session_query
+        loc.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"}, on_error=lambda bad: None)

@@ -16,6 +16,7 @@ BASE_IMAGE=localhost/pybase:bookworm
 CACHE="${AMRA_BASE_CACHE:-/var/tmp/amra-base}"
 MIRROR="${AMRA_DEBIAN_MIRROR:-http://deb.debian.org/debian}"
 
+export PATH="$PATH:/usr/local/sbin:/usr/sbin:/sbin"  # debootstrap lives in /usr/sbin
 for tool in buildah debootstrap; do
     command -v "$tool" >/dev/null || { echo "build_image.sh: $tool is missing (apt-get install buildah debootstrap)" >&2; exit 1; }
 done

@@ -1,4 +1,6 @@
-"""Many users at once: N concurrent headless Chromium sessions against one AMRA server.
+"""Many users at once: N concurrent headless Chromium sessions against one AMRA server, with the
+server pinned to its own CPUs (``--server-cpus``) and the browsers to the others, so what is
+measured is the server, not the browsers it would share its cores with.
 
 Each session opens the dashboard (``/main?run_s=...``), starts a run, and once points stream,
 moves the GJ slider ``--moves`` times while the run goes on; meanwhile the boundary map of the
@@ -16,9 +18,16 @@ case share one map job). Measured, in each page with ``performance.now()``:
 
 The server (``amra serve``, fresh store per session count) is started by the script unless
 ``--url`` is given; its memory (RSS of the whole process tree) is sampled before the sessions and
-while they run, giving the memory per session.
+while they run, giving the memory per session, and its CPU time while every session streams,
+giving the server CPU per streaming session. ``page_build_s`` is the server's own time to build a
+session's page (logged by app/main.py).
 
-    python scripts/load_test.py --sessions 1 8 16 32 --json load.json
+Per session count the JSON has ``errors``, ``p50_s``/``p95_s`` (slider release to the first point
+with the new GJ on screen), ``server_p50_s``/``server_p95_s`` (the change received by the server to
+the first rows computed with it sent), ``page_build_p50_s``/``page_build_p95_s``,
+``server_cpu_per_session`` (cores) and ``mb_per_session``.
+
+    python scripts/load_test.py --sessions 1 8 16 32 --server-cpus 0 --settled --json load.json
 
 A benchmark, not a timed test (tests/server/test_load.py runs it at N = 8 and asserts no errors).
 """
@@ -120,6 +129,36 @@ def tree_rss_mb(pid: int) -> float:
     return total / 1e6
 
 
+def _tree(pid: int) -> list:
+    children: dict = {}
+    for d in os.listdir("/proc"):
+        if d.isdigit():
+            try:
+                with open(f"/proc/{d}/stat") as f:
+                    children.setdefault(int(f.read().rsplit(")", 1)[1].split()[1]), []).append(int(d))
+            except (OSError, ValueError, IndexError):
+                pass
+    out, todo = [], [pid]
+    while todo:
+        p = todo.pop()
+        out.append(p)
+        todo += children.get(p, [])
+    return out
+
+
+def tree_cpu_s(pid: int) -> float:
+    """CPU time [s] used so far by ``pid`` and its descendants."""
+    total = 0
+    for p in _tree(pid):
+        try:
+            with open(f"/proc/{p}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += int(fields[11]) + int(fields[12])
+        except (OSError, ValueError, IndexError):
+            pass
+    return total / os.sysconf("SC_CLK_TCK")
+
+
 def cpu_seconds_of(match: str) -> float:
     """CPU time [s] used so far by every process whose command line contains ``match``."""
     total = 0
@@ -141,12 +180,13 @@ def cpu_seconds_of(match: str) -> float:
 class Server:
     """``amra serve`` in its own process group on a free port, with a fresh store."""
 
-    def __init__(self, extra_env=None, args=()):
+    def __init__(self, extra_env=None, args=(), cpus: str = ""):
         self.port = free_port()
         self.dir = tempfile.mkdtemp(prefix="amra-load-")
         env = dict(os.environ, AMRA_STORE=f"{self.dir}/store.sqlite", **(extra_env or {}))
         self.log = open(f"{self.dir}/serve.log", "wb")
-        self.proc = subprocess.Popen([sys.executable, "-m", "amra_core.cli", "serve", "--address", "127.0.0.1",
+        pin = ["taskset", "-c", cpus] if cpus else []  # the server and its pool processes on these CPUs
+        self.proc = subprocess.Popen([*pin, sys.executable, "-m", "amra_core.cli", "serve", "--address", "127.0.0.1",
                                       "--port", str(self.port), *args], cwd=REPO, env=env, stdout=self.log,
                                      stderr=subprocess.STDOUT, start_new_session=True)
         self.url = f"http://127.0.0.1:{self.port}/main"
@@ -173,6 +213,16 @@ class Server:
                 return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
         except OSError:
             return 0.0
+
+    def cpu_s(self) -> float:
+        """CPU time used so far by the server process tree [s]."""
+        return tree_cpu_s(self.proc.pid)
+
+    def page_builds_s(self) -> list:
+        """Server time of each page build [s] (logged by app/main.py)."""
+        import re
+        text = Path(self.dir, "serve.log").read_text(errors="replace")
+        return [float(x) for x in re.findall(r"page built in ([0-9.]+) s", text)]
 
     def live_events(self) -> list:
         """Each live change logged by the server: (received, sent) as epoch seconds, and its GJ."""
@@ -211,14 +261,27 @@ class Server:
         self.log.close()
 
 
-def niced_chromium(niceness: int) -> str:
-    """An executable that starts Chromium at ``niceness``: the browsers, which here share the
-    server's two cores, then take only the CPU the server leaves, as clients on their own machines
-    would (the wrapper goes in a temporary directory, never beside a user's files)."""
+def wrapped_chromium(niceness: int = 0, cpus: str = "") -> str:
+    """An executable that starts Chromium at ``niceness`` on ``cpus`` (taskset): the browsers then
+    stay off the server's CPUs, as clients on their own machines would (the wrapper goes in a
+    temporary directory, never beside a user's files)."""
     path = Path(tempfile.mkdtemp(prefix="amra-load-chromium-"), "chromium")
-    path.write_text(f'#!/bin/sh\nexec nice -n {int(niceness)} {CHROMIUM} "$@"\n')
+    pin = f"taskset -c {cpus} " if cpus else ""
+    path.write_text(f'#!/bin/sh\nexec {pin}nice -n {int(niceness)} {CHROMIUM} "$@"\n')
     path.chmod(0o755)
     return str(path)
+
+
+def other_cpus(server_cpus: str) -> str:
+    """The machine's CPUs not in ``server_cpus`` ("0", "0,1", "0-1")."""
+    mine = set()
+    for part in server_cpus.split(","):
+        lo, _, hi = part.partition("-")
+        mine.update(range(int(lo), int(hi or lo) + 1))
+    rest = sorted(set(os.sched_getaffinity(0)) - mine)
+    if not rest:
+        raise SystemExit(f"--server-cpus {server_cpus} leaves no CPU for the browsers")
+    return ",".join(map(str, rest))
 
 
 # ---------------------------------------------------------------------------- one session
@@ -363,12 +426,25 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
         sampler = asyncio.create_task(sample())
         t0 = time.monotonic()
         client_cpu0 = cpu_seconds_of("chromium")
+        streaming = {}  # server CPU [s] and time while every session streams (from the gate to the end)
+
+        async def mark_streaming():
+            if gate is None:
+                return
+            await gate.wait(timeout_s * 4)
+            if server:
+                streaming["cpu0"], streaming["t0"] = server.cpu_s(), time.monotonic()
         sep = "&" if "?" in url else "?"
         # each session starts from its own GJ (the map, GJ against CG, is the same case for all), so
         # the GJs the slider moves reach are unique to a session and the server's log lines match them
         gate = Settled(n) if settled else None
+        marker = asyncio.create_task(mark_streaming())
         results = await asyncio.gather(*[session(browser, f"{url}{sep}run_s={run_s:g}&gj={1500 + 10 * i:g}", moves,
                                                  timeout_s, i, stagger_s, gate) for i in range(n)])
+        if server and "cpu0" in streaming:
+            streaming["cpu_s"] = server.cpu_s() - streaming["cpu0"]
+            streaming["wall_s"] = time.monotonic() - streaming["t0"]
+        marker.cancel()
         wall = time.monotonic() - t0
         client_cpu = cpu_seconds_of("chromium") - client_cpu0
         rss_open = server.rss_mb() if server else None
@@ -394,8 +470,12 @@ async def run_level(n: int, url: str, moves: int, timeout_s: float, server=None,
            "client_cpu_cores": round(client_cpu / wall, 2), "machine_cores": os.cpu_count()}
     if server:
         srv_lat = server.live_latencies_s()
-        out.update({"server_side_moves": len(srv_lat), "server_side_p50_s": _pct(srv_lat, 0.5),
-                    "server_side_p95_s": _pct(srv_lat, 0.95)})
+        builds = server.page_builds_s()
+        out.update({"server_side_moves": len(srv_lat), "server_p50_s": _pct(srv_lat, 0.5),
+                    "server_p95_s": _pct(srv_lat, 0.95), "page_build_p50_s": _pct(builds, 0.5),
+                    "page_build_p95_s": _pct(builds, 0.95), "page_build_s": _pct(builds, 0.5)})
+        if streaming.get("wall_s"):
+            out["server_cpu_per_session"] = round(streaming["cpu_s"] / streaming["wall_s"] / n, 3)
         out.update(split_latencies([m for r in results for m in r["moves"]], server.live_events()))
         out["move_log"] = [dict(m, session=i) for i, r in enumerate(results) for m in r["moves"]]  # epoch s
         out.update({"rss_base_mb": round(rss0, 1), "rss_peak_mb": round(peak[0], 1),
@@ -414,6 +494,8 @@ def main(argv=None) -> int:
     ap.add_argument("--stagger", type=float, default=0.25, help="delay between session starts [s]")
     ap.add_argument("--url", help="an already running dashboard (.../main); default: start amra serve")
     ap.add_argument("--serve-arg", action="append", default=[], help="extra amra serve argument (repeatable)")
+    ap.add_argument("--server-cpus", default="",
+                    help="CPUs for the server (taskset list, e.g. 0); the browsers get the others")
     ap.add_argument("--client-nice", type=int, default=0,
                     help="run the browsers at this niceness (e.g. 19: the server's cores go to the server first, "
                          "as if the browsers ran on other machines); default 0, same priority as the server")
@@ -425,14 +507,16 @@ def main(argv=None) -> int:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(143))  # so the server below is stopped too
     results = []
     for n in a.sessions:
-        server = None if a.url else Server(args=a.serve_arg)
+        server = None if a.url else Server(args=a.serve_arg, cpus=a.server_cpus)
         try:
             launch = None
-            if a.client_nice:
-                launch = {"executable_path": niced_chromium(a.client_nice), "args": CHROMIUM_ARGS, "headless": True}
+            if a.client_nice or a.server_cpus:
+                exe = wrapped_chromium(a.client_nice, other_cpus(a.server_cpus) if a.server_cpus else "")
+                launch = {"executable_path": exe, "args": CHROMIUM_ARGS, "headless": True}
             r = asyncio.run(run_level(n, a.url or server.url, a.moves, a.timeout, server, a.run_s, a.stagger,
                                       launch=launch, settled=a.settled))
             r["client_nice"] = a.client_nice
+            r["server_cpus"] = a.server_cpus or "all"
         finally:
             if server:
                 server.stop()

@@ -13,6 +13,7 @@ set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 source scripts/venv.sh
 
+export PATH="$PATH:/usr/local/sbin:/usr/sbin:/sbin"  # debootstrap lives in /usr/sbin
 need=()
 [[ -x /usr/bin/chromium ]] || need+=(chromium)
 command -v buildah >/dev/null || need+=(buildah)        # image tests: build and run the Dockerfile

@@ -1,6 +1,7 @@
 # Sourced by dashboard.sh and test.sh: create (or reuse) the project virtual environment .venv
 # with the first python3 >= 3.11 on PATH, Debian's own included (PEP 668 refuses system pip),
-# and install AMRA into it (editable, so assets/ stay at the repo root). Sets $PY.
+# and install AMRA into it (editable, so assets/ stay at the repo root) with the exact dependency
+# versions of constraints.txt (the ones the tests passed on). Sets $PY.
 # Usage: amra_venv EXTRAS   (e.g. "" or "test")
 export PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_ROOT_USER_ACTION=ignore
 
@@ -39,16 +40,16 @@ amra_venv() {
     PY="$venv/bin/python"
     spec="."; [[ -n "$extras" ]] && spec=".[$extras]"
     stamp="$venv/.amra-install-$extras.stamp"
-    want="$("$PY" --version 2>&1) $(sha256sum pyproject.toml | cut -d' ' -f1) $root"
+    want="$("$PY" --version 2>&1) $(cat pyproject.toml constraints.txt | sha256sum | cut -d' ' -f1) $root"
     if [[ -z "${AMRA_FORCE_INSTALL:-}" && -f "$stamp" && "$(cat "$stamp")" == "$want" ]] \
             && (cd / && "$PY" -c "import amra_core, app, pathlib, sys; sys.exit(pathlib.Path(app.__file__).resolve().parents[1] != pathlib.Path('$root'))") 2>/dev/null; then
         return 0
     fi
-    echo "$(basename "$0"): installing AMRA into $venv (pip install -e '$spec') ..."
+    echo "$(basename "$0"): installing AMRA into $venv (pip install -c constraints.txt -e '$spec') ..."
     local start=$SECONDS
     rm -f "$stamp"
     "$PY" -m pip install -q -U pip >/dev/null 2>&1 || true
-    "$PY" -m pip install -q -e "$spec" || return 1
+    "$PY" -m pip install -q -c constraints.txt -e "$spec" || return 1
     echo "$want" >"$stamp"
     echo "$(basename "$0"): install took $((SECONDS - start)) s"
 }

@@ -34,9 +34,7 @@ The basic-auth file is JSON, ``{"user": "password", ...}`` (a password is never 
 command line, where ``ps`` shows it). Secrets reach Panel through its environment, not its argv.
 
 The app reads its settings from the environment of the server process: ``AMRA_STORE``,
-``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S`` (and, passed through unchanged,
-``AMRA_STREAM_PERIOD_MS``: each session's page-update period [ms], default 25; and
-``AMRA_STREAM_BUDGET_HZ``: live-plot updates per second for the whole server, default 160).
+``AMRA_MAP_WORKERS``, ``AMRA_DASK_SCHEDULER``, ``AMRA_MAX_RUN_S``.
 """
 from __future__ import annotations
 
@@ -212,6 +210,9 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
         argv += ["--num-threads", str(s["num_threads"])]
     if setup.is_file():
         argv += ["--setup", str(setup)]
+    report = APP_DIR.parent / "docs" / "validation"
+    if report.is_dir():  # the validation report, linked from the page's help
+        argv += ["--static-dirs", f"validation={report}"]
     for origin in s["origins"]:
         argv += ["--allow-websocket-origin", origin]
     if s["liveness"]:

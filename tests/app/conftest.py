@@ -22,7 +22,7 @@ def _reset_panel_state():
 @pytest.fixture(scope="session")
 def analysis_pool():
     """One analysis process for the whole test session (spawning one costs seconds)."""
-    from app.background import AnalysisPool
+    from app.server.pool import AnalysisPool
     pool = AnalysisPool()
     yield pool
     pool.close()
@@ -30,7 +30,7 @@ def analysis_pool():
 
 @pytest.fixture
 def server_settings(tmp_path):
-    from app.settings import ServerSettings
+    from app.server.settings import ServerSettings
     return ServerSettings(store_path=tmp_path / "cells.sqlite", map_workers=1, max_run_s=30.0)
 
 

@@ -9,8 +9,8 @@ from amra_core.flight import SettingsError
 from amra_core.rotor_io import load_preset
 from app.controls import UPLOADED, Controls
 from app.presets import PRESETS
-from app.settings import ServerSettings
-from app.settings import SettingsError as EnvError
+from app.server.settings import ServerSettings
+from app.server.settings import SettingsError as EnvError
 
 
 def test_defaults_give_the_paper_boundary_case():
@@ -80,8 +80,16 @@ def test_uploaded_rotor_needs_a_file():
 def test_every_preset_gives_a_valid_case_and_explains_itself(key):
     c = Controls(preset=key)
     c.case()
+    scenario = c.scenario()
     p = PRESETS[key]
-    assert len(p.explanation) > 40 and "\n" not in p.explanation
+    assert len(p.explanation) > 40
+    if key.startswith("fig"):  # the paper's story: what the paper reports, what this model gives, and why
+        assert "**The paper:**" in p.explanation and "**This model:**" in p.explanation
+        (change,) = scenario.changes
+        assert change.t_s == 2.0 and change.gj_nm2 == c.gj_nm2
+        assert scenario.case.rotor.stations.gj_nm2[0] == 1500.0
+    else:
+        assert scenario.changes == ()
     for name, v in p.as_dict().items():
         assert getattr(c, name) == v
 

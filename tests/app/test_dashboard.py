@@ -1,4 +1,4 @@
-"""The session object without a browser: pump -> the plots' data source, apply-live from the controls, stop on
+"""The dashboard without a browser: a run reaches the plots, apply-live from the controls, stop on
 close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as messages."""
 from __future__ import annotations
 
@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from amra_core.simulation import HISTORY_COLUMNS
-from app.dashboard import Dashboard
-from app.map_jobs import MapRegistry
+from app.app import Dashboard
+from app.presets import PRESETS
+from app.server.map_jobs import MapRegistry
 
 
 @pytest.fixture
@@ -29,79 +30,86 @@ def pump_until(d, pred, wait, timeout_s=60, what="condition"):
 
 def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     dash.controls.param.update(run_s=1.0, speed=10.0)
-    assert dash.start_run()
+    dash.controls.param.trigger("run")
     pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
-    data = dash.histories.frame()
+    data = dash.live.frame()
     assert len(data) > 20 and list(data.columns)[:2] == ["t_s", "omega_rad_s"]
     assert data["t_s"].iloc[-1] == pytest.approx(1.0, abs=0.01) and (data["gj_nm2"] == 1500.0).all()
     # a 1 s run is too short to call stable (issue 21 §7): its final verdict says so
-    v = dash.verdict.verdict
+    v = dash.status.verdict
     assert v.verdict == "undetermined" and "run too short" in v.explanation, v
-    assert "data-final='true'" in dash.verdict.pane.object
-    assert "finished" in dash.run_status.object
+    assert "data-final='true'" in dash.status.card.object
+    assert "finished" in dash.status.run.object
     csv = dash.history_csv().getvalue().splitlines()
-    assert csv[0] == ",".join(HISTORY_COLUMNS) and len(csv) == len(dash.last_history) + 1
+    meta = [ln for ln in csv if ln.startswith("# ")]
+    assert meta[0].startswith("# AMRA ") and "# fidelity: rigid" in meta and "# verdict: undetermined" in meta
+    assert csv[len(meta)] == ",".join(HISTORY_COLUMNS) and len(csv) == len(meta) + len(dash.last_history) + 1
+    assert dash.exports.buttons["history"].filename == "amra-paper-boundary-rigid-gj1500-cg40-history.csv"
 
 
 def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     dash.controls.param.update(run_s=4.0, speed=4.0)
     dash.start_run()
-    pump_until(dash, lambda: len(dash.histories.frame()) and dash.histories.frame()["t_s"].iloc[-1] > 0.5,
+    pump_until(dash, lambda: len(dash.live.frame()) and dash.live.frame()["t_s"].iloc[-1] > 0.5,
                wait, what="0.5 s of run")
-    t_change = dash.histories.frame()["t_s"].iloc[-1]
+    t_change = dash.live.frame()["t_s"].iloc[-1]
     dash.controls.gj_nm2 = 700.0
-    pump_until(dash, lambda: (dash.histories.frame()["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
-    data = dash.histories.frame()
+    pump_until(dash, lambda: (dash.live.frame()["gj_nm2"] == 700.0).any(), wait, what="the new GJ")
+    data = dash.live.frame()
     first_new = data[data["gj_nm2"] == 700.0]["t_s"].iloc[0]
     assert first_new > t_change and np.all(np.diff(data["t_s"]) > 0)  # the same run, continuing
-    assert "applied live" in dash.live_note.object
+    assert "applied live" in dash.status.note.object
     # the server's share of the slider latency is measured (change received -> first rows sent)
-    assert len(dash.live_latencies_s) == 1 and 0.0 < dash.live_latencies_s[0] < 30.0
-    dash.stop_run()
-
-
-def test_a_live_changes_first_rows_go_out_though_the_browser_has_not_confirmed_drawing(dash, wait, monkeypatch):
-    """A browser that confirms nothing gets no more batches for ACK_TIMEOUT_S (here a minute), except
-    the first rows computed with the user's own change, which are sent at once."""
-    import app.streams as streams
-    monkeypatch.setattr(streams, "ACK_TIMEOUT_S", 60.0)
-    h = dash.histories
-    h.enable_flow_control()
-    dash.controls.param.update(run_s=20.0, speed=4.0)
-    dash.start_run()
-    pump_until(dash, lambda: h.in_flight >= streams.WINDOW_BATCHES and h.pending_rows > 0, wait,
-               what="the window full of unconfirmed batches")
-    sent = h.batches_sent
-    dash.controls.gj_nm2 = 700.0
-    pump_until(dash, lambda: (np.asarray(h.source.data["gj_nm2"]) == 700.0).any(), wait, timeout_s=30,
-               what="the new GJ sent despite the full window")
-    assert h.batches_sent == sent + 1 and h.in_flight == streams.WINDOW_BATCHES + 1
-    for _ in range(20):  # and then the window holds again
-        dash.pump()
-    assert h.batches_sent == sent + 1
-    dash.stop_run()
+    assert len(dash.session.live_latencies_s) == 1 and 0.0 < dash.session.live_latencies_s[0] < 30.0
+    dash.controls.param.trigger("stop")
+    assert not dash.session.running
 
 
 def test_close_stops_the_worker_and_releases_the_map(dash, wait):
     dash.controls.param.update(run_s=30.0, speed=1.0)
     dash.refresh_analyses()
     dash.start_run()
-    wait(lambda: dash.worker.running, 10, what="the worker")
+    wait(lambda: dash.session.running, 10, what="the run")
     job = dash.map.job
     assert job is not None and id(dash) in job.subscribers
     dash.close()
-    assert not dash.worker.running
+    assert not dash.session.running
     assert id(dash) not in job.subscribers
 
 
-def test_fig10_preset_is_unstable(dash, wait):
+def test_fig10_preset_tells_the_papers_story(dash, wait):
+    """Steady autorotation at the nominal GJ, softened to GJ 100 at t = 2 s, then flutter and the
+    rotor speed below half its trim within a few seconds (paper Fig. 10)."""
+    from amra_core.simulation import COL
     dash.controls.preset = "fig10"
-    dash.controls.param.update(run_s=6.0, speed=50.0)
+    assert dash.controls.soften_at_s == 2.0 and dash.controls.gj_nm2 == 100.0
+    assert "**The paper:**" in PRESETS["fig10"].explanation and "GJ ≈ 414" in PRESETS["fig10"].explanation
+    dash.controls.param.update(speed=50.0)
+    assert dash.controls.preset == "fig10"  # the playback speed is not part of the case
     dash.start_run()
-    pump_until(dash, lambda: dash.last_history is not None, wait, 120, what="the Fig. 10 run")
-    v = dash.verdict.verdict
-    assert v.unstable, v
-    assert any("no trim exists" in t for _, t in dash.messages)  # the start note is shown
+    pump_until(dash, lambda: dash.last_history is not None, wait, 180, what="the Fig. 10 run")
+    h = dash.last_history
+    omega0 = h[0, COL["omega_rad_s"]]
+    assert h[h[:, 0] < 2.0, COL["omega_rad_s"]].min() > 0.97 * omega0  # steady until the softening
+    v = dash.status.verdict
+    assert v.verdict in ("flutter", "divergence") and 2.0 < v.collapse_time_s < 8.0, v
+    assert "softened as scripted at t = 2.0" in dash.status.note.object and "GJ 100 N m²/rad" in dash.status.note.object
+    assert (dash.live.frame()["gj_nm2"] == 100.0).any() and (dash.live.frame()["gj_nm2"] == 1500.0).any()
+    card = dash.status.card.object  # the card names the case it belongs to
+    assert "Fig. 10: rigid, axial, GJ 100" in card and "GJ 1500 → 100 N m²/rad at 2 s" in card
+    marks = dash.live.markers.data  # a vertical marker with the new value in every live plot
+    assert list(marks["text"]) == ["GJ 100"] and abs(marks["t_s"][0] - 2.0) < 0.01
+
+
+def test_table1_shows_the_teeter_beside_the_flight_measurement(dash, wait):
+    dash.controls.preset = "table1a"
+    dash.controls.param.update(run_s=1.0, speed=50.0)
+    dash.start_run()
+    pump_until(dash, lambda: dash.last_history is not None, wait, 180, what="the Table 1 run")
+    note = dash.status.note.object
+    assert "measured in flight 0.031 rad; original AMRA 0.026 rad" in note
+    beta = float(note.split("this model ")[1].split(" rad")[0])
+    assert 0.0 < beta < 0.2
 
 
 def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
@@ -116,6 +124,9 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
     assert not all(p.trimmed for p in dash.modes.points)  # the fold at low GJ (paper-boundary blade)
     assert "no trim (fold)" in dash.modes.locus_info.object
     assert dash.modes.csv().getvalue().startswith("mode,frequency [Hz]")
+    text = dash.modes_csv().getvalue()
+    assert text.startswith("# AMRA ") and "# gj_nm2: 1500" in text and "\nmode,frequency [Hz]" in text
+    assert dash.exports.buttons["modes"].filename == "amra-paper-boundary-rigid-gj1500-cg40-modes.csv"
     fan = dash.fan.pipe.data
     assert len(fan["modes"]) >= 5
     teeter = dict(fan["modes"])["teeter"]  # the rigid tilt of a teetering rotor is exactly 1/rev
@@ -123,19 +134,22 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
 
 
 def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
-    dash.map.figure()
-    classes = dash.map._class_legends[-1]
-    assert not classes.visible  # the cell-class legend: no empty box before the first cell
+    fig = dash.map.figure()
+    from app.views.map import CLASS_COLOURS
+    legends = [[item.label["value"] for item in lg.items] for lg in fig.right]
+    assert legends[0] == list(CLASS_COLOURS)  # the same order whatever class a map meets first
+    assert "elastic axis (EA)" in legends[1] and legends[1][:3] == ["boundary rigid", "boundary fem-torsion",
+                                                                     "boundary fem-coupled"]
     dash.refresh_analyses()
+    assert 0.40 in dash.map.job.spec.cg_values  # the paper's CG is always a column
+    assert dash.map.ea_source.data["x"] == [32.0]  # the EA drawn where it is
     pump_until(dash, lambda: dash.map.job.state == "done" and dash.map.cells, wait, 180, what="the map")
     dash.map.poll()
-    assert classes.visible and len(classes.items) == 1  # one legend_field item, one entry per class
     assert dash.map.progress.value == 100 and "complete" in dash.map.status.object
     cell = dash.map.cells[3]
-    dash.load_cell(cell)
-    assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == cell.gj_nm2
+    dash.load_cell(cell)  # values rounded to the grid's resolution
+    assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == float(f"{cell.gj_nm2:.3g}")
     # the plot holds every cell once, coloured by its class
-    from app.map_view import CLASS_COLOURS
     from amra_core.boundary import cell_class
     data = dash.map.cells_source.data
     assert len(data["cg_pct"]) == len(dash.map.cells)
@@ -144,9 +158,15 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     from types import SimpleNamespace
     other = dash.map.cells[-1]
     dash.map._tapped(SimpleNamespace(x=100 * other.cg + 0.1, y=other.gj_nm2 * 1.001))
-    assert dash.controls.cg_pct == pytest.approx(100 * other.cg) and dash.controls.gj_nm2 == other.gj_nm2
-    assert dash.map.csv().getvalue().splitlines()[0].startswith("cg,gj_nm2,verdict")
-    assert len(dash.map.csv().getvalue().splitlines()) == len(dash.map.cells) + 1
+    assert dash.controls.cg_pct == pytest.approx(100 * other.cg) and dash.controls.gj_nm2 == float(f"{other.gj_nm2:.3g}")
+    lines = dash.map.csv().getvalue().splitlines()
+    meta = [ln for ln in lines if ln.startswith("# ")]
+    assert "# complete: yes" in meta and "# ea_pct_chord: 32" in meta
+    assert lines[len(meta)].startswith("cg_pct_chord,gj_nm2,verdict")  # CG in % as on the page
+    assert len(lines) == len(meta) + len(dash.map.cells) + 1
+    assert lines[-1].split(",")[0] == f"{100 * max(c.cg for c in dash.map.cells):.8g}"
+    dash.map.job.state = "running"  # a half-finished map says so
+    assert "# complete: NO" in dash.map.csv().getvalue()
 
 
 def test_bad_input_becomes_a_message_and_the_session_keeps_working(dash, wait):
@@ -169,16 +189,61 @@ def test_uploaded_rotor_is_used(dash):
     assert dash.map_spec().rotor.name == "mccutcheon"
 
 
-def test_the_page_registers_no_busy_indicator_shared_by_every_session(dash):
-    """Panel's template busy indicator follows one process-wide busy flag: every event of any
-    session would spin it in every page (and re-layout each page). The page has none."""
+def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
+    """No busy indicator (Panel's busy flag is per process), the views' tabs render lazily, and the
+    page carries the hooks the browser tests use."""
     import holoviews as hv
     import panel as pn
     from bokeh.document import Document
-    from app.layout import build_layout
     hv.extension("bokeh", logo=False)
-    before = len(pn.state._indicators)
-    page = build_layout(dash)
+    page = dash.__panel__()
     assert page.busy_indicator is None
     doc = page.server_doc(Document())
-    assert len(pn.state._indicators) == before and doc.roots
+    assert doc.roots
+    classes = {c for m in doc.models for c in (getattr(m, "css_classes", None) or [])}
+    assert {"amra-run", "amra-stop", "amra-reset", "amra-gj", "amra-gj-slider", "amra-upload"} <= classes
+
+
+def test_the_gj_slider_and_input_are_two_views_of_one_parameter(dash):
+    import math
+    from app.controls import gj_slider
+    slider = gj_slider(dash.controls)
+    dash.controls.gj_nm2 = 420.0
+    assert slider.value == pytest.approx(math.log10(420.0)) and dash.controls.gj_nm2 == 420.0  # no echo
+    with pn_edit(slider):
+        slider.value_throttled = math.log10(2000.0)  # what a release in the browser sets
+    assert dash.controls.gj_nm2 == pytest.approx(2000.0)
+
+
+def pn_edit(widget):
+    import param
+    return param.edit_constant(widget)
+
+
+def test_each_run_starts_with_a_clean_message_area(dash, wait):
+    dash.notify("a message of the last run", "warning")
+    assert dash.alert.visible
+    dash.controls.param.update(run_s=0.5, speed=10.0)
+    dash.start_run()
+    assert dash.messages == [] and not dash.alert.visible
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the run")
+
+
+def test_map_columns_always_include_the_papers_cg():
+    from app.app import map_columns
+    for n in (2, 3, 7, 9, 16, 31):
+        cgs = map_columns(n)
+        assert 0.40 in cgs and cgs[0] == 0.20 and cgs[-1] == 0.50 and list(cgs) == sorted(set(cgs))
+
+
+def test_the_map_time_estimate_follows_the_rate_of_computed_cells():
+    from app.views.map import Eta
+    eta, now = Eta(), [100.0]
+    eta._clock = lambda: now[0]
+    assert eta.update(0, 50, True) == ""  # the first look starts the clock
+    now[0] += 10.0
+    assert eta.update(2, 48, True) == ""  # too few cells for a rate
+    assert eta.update(5, 45, True) == ", about 90 s left"  # 5 cells in 10 s: 45 cells in 90 s
+    now[0] += 90.0
+    assert eta.update(5, 45, True) == ", about 15 min left"  # 5 cells in 100 s: 900 s
+    assert eta.update(50, 0, True) == "" and eta.update(5, 45, False) == ""

@@ -79,17 +79,18 @@ def dashboard_server(tmp_path_factory):
     store = tmp_path_factory.mktemp("store") / "cells.sqlite"
     old = os.environ.get("AMRA_STORE")
     os.environ["AMRA_STORE"] = str(store)
+    from app.compute import warm, warm_worker
     from app.main import create_app
-    from app.map_jobs import get_registry
-    from app.settings import ServerSettings
-    from app.analysis import warm_worker
-    from app.background import get_analysis_pool
-    from app.warmup import warm
+    from app.server.map_jobs import get_registry
+    from app.server.pool import get_analysis_pool, get_run_pool
+    from app.server.settings import ServerSettings
 
     warm()
     registry = get_registry(ServerSettings.from_env())
     pool = get_analysis_pool()
-    pool.submit(warm_worker).result(timeout=300)
+    run_pool = get_run_pool()
+    for p in (pool, run_pool):
+        p.submit(warm_worker).result(timeout=300)
     sessions = []
 
     def app():
@@ -110,8 +111,9 @@ def dashboard_server(tmp_path_factory):
         server.join(timeout=30)
         registry.close()
         pool.close()
-        pn.state.cache.pop("amra-map-registry", None)
-        pn.state.cache.pop("amra-analysis-pool", None)
+        run_pool.close()
+        for key in ("amra-map-registry", "amra-analysis-pool", "amra-run-pool"):
+            pn.state.cache.pop(key, None)
         if old is None:
             os.environ.pop("AMRA_STORE", None)
         else:
@@ -126,6 +128,9 @@ def dashboard_url(dashboard_server):
 @pytest.fixture
 def watched_page(page):
     """The Playwright page with its console errors and outside requests recorded."""
+    # a page on a starved machine (browsers beside the server and other work on two cores) can take
+    # tens of seconds to answer; the tests wait for states, never for a time
+    page.set_default_timeout(120_000)
     page.amra_errors = []
     page.amra_outside = []
     page.on("console", lambda m: m.type == "error" and page.amra_errors.append(m.text))

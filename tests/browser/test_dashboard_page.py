@@ -10,7 +10,7 @@ import re
 import pytest
 from playwright.sync_api import expect
 
-from app.layout import TITLE
+from app.app import TITLE
 from helpers import map_cells, open_dashboard, plot_point, progress_value, shot, streamed, wait_for
 
 pytestmark = pytest.mark.browser
@@ -47,9 +47,9 @@ def test_every_view_tab_opens_offline_without_console_errors(watched_page, dashb
     assert page.amra_errors == [], f"console errors: {page.amra_errors}"
 
 
-def test_a_run_streams_points_into_the_plots(watched_page, dashboard_url):
+def test_a_run_streams_points_into_the_plots(watched_page, dashboard_server):
     page = watched_page
-    open_dashboard(page, dashboard_url + "?run_s=4&speed=1")
+    open_dashboard(page, dashboard_server[0] + "?run_s=4&speed=1")
     page.locator(".amra-run button").click()
     seen = set()
 
@@ -60,9 +60,10 @@ def test_a_run_streams_points_into_the_plots(watched_page, dashboard_url):
         return t is not None and t > 3.99
     wait_for(finished, 90, every_s=0.05, what="the whole run in the plots")
     assert len(seen) >= 3, f"points arrived in {len(seen)} update(s), not streamed"  # several partial states
-    rows, t, gj = streamed(page)
-    assert 700 <= rows <= 900 and gj == 1500  # 200 rows per simulated second
     expect(page.locator(".amra-verdict[data-final='true']")).to_be_visible(timeout=30_000)
+    rows, t, gj = streamed(page)
+    history = _session(dashboard_server).last_history
+    assert rows == len(history) > 1000 and gj == 1500  # every recorded row: full resolution below 2000
     shot(page, "02-run-streamed")
     assert page.amra_errors == []
 
@@ -76,36 +77,19 @@ WebSocket.prototype.send = function (data) {
 };
 """
 
-_SAME_CSS_JS = """() => {
-  const IS = Bokeh.require("core/dom").InlineStyleSheet;
-  const sheet = new IS(".amra-probe { color: red; }");
-  const node = sheet.el.firstChild;
-  sheet._update(sheet.css);  // the same text again: nothing to re-parse
-  const kept = sheet.el.firstChild === node;
-  sheet._update(".amra-probe { color: blue; }");
-  return [kept, sheet.el.firstChild !== node && sheet.css.includes("blue")];
-}"""
-
-
-def test_a_streaming_page_sends_back_only_its_drawing_confirmations(watched_page, dashboard_url):
-    """While a run streams, the page tells the server which batches it has drawn and nothing more:
-    the plot ranges it recomputes each drawing stay in the browser (a message per range and
-    drawing otherwise, on the event loop all sessions share). And BokehJS's same-text stylesheet
-    updates (thousands per second of a run) no longer make the browser re-parse the sheet."""
+def test_a_streaming_page_sends_back_no_range_updates(watched_page, dashboard_url):
+    """While a run streams, the page does not send the plot ranges it recomputes at each drawing
+    back to the server (a message per range and drawing otherwise); they still follow the data."""
     page = watched_page
     page.add_init_script(_RECORD_SENDS_JS)
     open_dashboard(page, dashboard_url + "?run_s=6&speed=1")
-    assert page.evaluate(_SAME_CSS_JS) == [True, True]
     page.locator(".amra-run button").click()
     wait_for(lambda: (streamed(page)[1] or 0) > 1.0, 60, what="1 s of run")
     page.evaluate("() => { window.__amraSends = []; }")
     wait_for(lambda: (streamed(page)[1] or 0) > 3.0, 60, what="3 s of run")
     events = [ev for text in page.evaluate("() => window.__amraSends") if text.startswith('{"events"')
               for ev in json.loads(text)["events"]]
-    attrs = {(ev.get("kind"), ev.get("attr")) for ev in events}
-    assert ("ModelChanged", "tags") in attrs, attrs  # the drawn-batch count (flow control)
-    assert not {a for _, a in attrs} & {"start", "end"}, attrs
-    # the ranges still follow the data: the shared time axis reaches the newest streamed point
+    assert not {ev.get("attr") for ev in events} & {"start", "end"}, events
     t_last = streamed(page)[1]
     ends = page.evaluate("""() => [...Bokeh.documents[0].all_models]
         .filter(m => m.type === 'DataRange1d').map(m => m.end)""")
@@ -113,178 +97,54 @@ def test_a_streaming_page_sends_back_only_its_drawing_confirmations(watched_page
     assert page.amra_errors == []
 
 
-_COUNT_PAGE_LAYOUTS_JS = """() => {
-  const L = Bokeh.require("models/layouts/layout_dom").LayoutDOMView;
-  const compute = L.prototype.compute_layout;
-  window.__amraLayouts = 0;
-  L.prototype.compute_layout = function () {
-    if (!(this.parent instanceof L)) { window.__amraLayouts += 1; }  // a layout of the whole page
-    return compute.call(this);
-  };
-}"""
-
-_SHOWN_TEXT_JS = """el => [...el.shadowRoot.children].filter(c => c.tagName !== 'STYLE' && c.tagName !== 'LINK')
-  .map(c => c.textContent).join('')"""
-_RUN_STATUS_JS = """() => Bokeh.documents[0].get_model_by_name("run-status").text"""
-
-
-def test_status_texts_change_in_place_without_laying_out_the_page(watched_page, dashboard_url):
-    """The run clock (and the verdict card, the map status) change several times a second; each
-    change shows in the page, and none lays out the whole page again (app.browser_tuning)."""
-    page = watched_page
-    open_dashboard(page, dashboard_url + "?run_s=8&speed=1")
-    page.evaluate(_COUNT_PAGE_LAYOUTS_JS)
-    page.locator(".amra-run button").click()
-    wait_for(lambda: (streamed(page)[1] or 0) > 1.0, 60, what="1 s of run")
-    page.evaluate("() => { window.__amraLayouts = 0; }")
-    texts = set()
-
-    def clock_moved():
-        model_text = page.evaluate(_RUN_STATUS_JS)
-        shown = page.locator(".amra-run-status").evaluate(_SHOWN_TEXT_JS)
-        if "t = " in model_text and model_text != page.evaluate(_RUN_STATUS_JS):
-            return False  # it changed between the two reads
-        if "t = " in model_text:
-            plain = re.sub(r"<[^>]+>", "", model_text)
-            assert plain in shown, (model_text, shown)  # what the server set is what the page shows
-            texts.add(plain)
-        return len(texts) >= 5
-    wait_for(clock_moved, 60, every_s=0.05, what="five run-clock texts")
-    # before: one layout of the whole page per text change (3.9 a second in a run, 2026-12-02)
-    assert page.evaluate("() => window.__amraLayouts") <= 1, texts
-    assert page.amra_errors == []
-
-
-_COUNT_TREES_JS = """() => {
-  const SI = Bokeh.require("core/util/spatial").SpatialIndex;
-  const finish = SI.prototype.finish;
-  window.__amraTrees = 0;
-  SI.prototype.finish = function () { window.__amraTrees += 1; return finish.call(this); };
-  const source = Bokeh.documents[0].get_model_by_name("amra-time-histories");
-  window.__amraBatches = 0;
-  source.streaming.connect(() => { window.__amraBatches += 1; });
-}"""
-
-_LIVE_RANGES_JS = """() => {
-  const doc = Bokeh.documents[0];
-  const source = doc.get_model_by_name("amra-time-histories");
-  const col = (name) => source.data instanceof Map ? source.data.get(name) : source.data[name];
-  const out = [];
-  for (const m of doc.all_models) {
-    if (!m.tags || !m.tags.includes("amra-live-plot")) { continue; }
-    for (const r of m.renderers) {
-      if (r.data_source !== source) { continue; }
-      const ys = Array.from(col(r.glyph.y.field)), ts = Array.from(col(r.glyph.x.field));
-      out.push({field: r.glyph.y.field, y_min: Math.min(...ys), y_max: Math.max(...ys),
-                start: m.y_range.start, end: m.y_range.end, t_max: Math.max(...ts), x_end: m.x_range.end});
+_LIVE_POINTS_JS = """() => {
+  const out = {};
+  for (const m of Bokeh.documents[0].all_models) {
+    const d = m.data;
+    if (!d || typeof d !== 'object' || Array.isArray(d)) continue;
+    const get = (k) => (d instanceof Map ? d.get(k) : d[k]);
+    const t = get('t_s');
+    if (!t || !get('gj_nm2')) continue;
+    for (const k of ['omega_rad_s', 'teeter_deg', 'twist0_deg', 'descent_m_s']) {
+      if (get(k)) out[k] = {n: t.length, t_min: Math.min(...t), t_max: Math.max(...t)};
     }
   }
   return out;
 }"""
 
 
-_SELECT_JS = """() => {
-  const B = Bokeh.require("core/util/bitset").BitSet;
-  const data = new Float64Array([1, 2, 3, 4, 5]);
-  const all = new B(5, 1), some = new B(5, 0);
-  some.set(1); some.set(3);
-  const ones = B.prototype.ones;
-  let listed = 0;  // BokehJS's gather lists the set indices first
-  B.prototype.ones = function () { listed += 1; return ones.call(this); };
-  const whole = all.select(data);
-  const whole_listed = listed;
-  const part = some.select(data);
-  B.prototype.ones = ones;
-  return [Array.from(whole), whole !== data && whole instanceof Float64Array, Array.from(part),
-          Array.from(all.select([7, 8, 9, 10, 11])), whole_listed, listed];
-}"""
-
-
-def test_a_full_index_set_selects_a_copy_of_the_whole_column(watched_page, dashboard_url):
-    """The copy that replaces BokehJS's gather when every row is selected gives what the gather gave."""
+def test_a_long_run_holds_at_most_2000_points_per_curve_and_a_zoom_shows_full_resolution(watched_page,
+                                                                                          dashboard_server):
     page = watched_page
-    open_dashboard(page, dashboard_url)
-    # the whole column copied without listing its indices; a part still gathered through them
-    assert page.evaluate(_SELECT_JS) == [[1, 2, 3, 4, 5], True, [2, 4], [7, 8, 9, 10, 11], 0, 1]
-
-
-_M4_JS = """() => {
-  // a 1300 px canvas, 24 000 points: a growing 1/rev-like oscillation (31 rows a cycle, as teeter at
-  // 200 rows/s), a smooth change (rotor speed) and a line with gaps; drawn whole and through M4
-  const W = 1300, H = 220, n = 24000, out = {};
-  const signals = {
-    oscillation: (i) => 110 + (5 + 85 * i / n) * Math.sin(2 * Math.PI * i / 31),
-    smooth: (i) => 110 + 60 * Math.tanh((i - n / 2) / 2000),
-    gaps: (i) => (i % 997 < 20 ? NaN : 110 + 80 * Math.cos(i * 0.11)),
-  };
-  for (const [name, f] of Object.entries(signals)) {
-    const sx = new Float64Array(n), sy = new Float64Array(n);
-    for (let i = 0; i < n; i++) { sx[i] = 10 + (W - 20) * i / n; sy[i] = f(i); }
-    const indices = Array.from({length: n}, (_, i) => i);
-    const draw = (m4) => {
-      const c = document.createElement("canvas"); c.width = W; c.height = H;
-      const ctx = c.getContext("2d"); ctx.fillStyle = "white"; ctx.fillRect(0, 0, W, H);
-      ctx.lineWidth = 2; ctx.lineJoin = "bevel"; ctx.strokeStyle = "#1f77b4";  // Bokeh's defaults
-      let points = 0;
-      const moveTo = ctx.moveTo.bind(ctx), lineTo = ctx.lineTo.bind(ctx);
-      ctx.moveTo = (x, y) => { points++; moveTo(x, y); };
-      ctx.lineTo = (x, y) => { points++; lineTo(x, y); };
-      if (m4) { window.__amraM4Path(ctx, sx, sy, indices, 1); }
-      else { ctx.beginPath(); let move = true;
-        for (const i of indices) { if (!isFinite(sx[i] + sy[i])) { move = true; continue; }
-          if (move) { ctx.moveTo(sx[i], sy[i]); move = false; } else { ctx.lineTo(sx[i], sy[i]); } } }
-      ctx.stroke();
-      return [ctx.getImageData(0, 0, W, H).data, points];
-    };
-    const [a, pa] = draw(false), [b, pb] = draw(true);
-    let inked = 0, differ = 0;
-    for (let p = 0; p < a.length; p += 4) {
-      const d = Math.max(Math.abs(a[p] - b[p]), Math.abs(a[p + 1] - b[p + 1]), Math.abs(a[p + 2] - b[p + 2]));
-      if (a[p] < 250 || b[p] < 250) { inked++; }
-      if (d > 64) { differ++; }  // more than a quarter of full intensity
-    }
-    out[name] = {inked, differ, points_whole: pa, points_m4: pb};
-  }
-  out.no_going_back = window.__amraM4Path(document.createElement("canvas").getContext("2d"),
-                                          [0, 1, 0.5, 2], [0, 1, 2, 3], [0, 1, 2, 3], 1);
-  return out;
-}"""
-
-
-def test_dense_live_lines_are_drawn_through_m4_to_the_same_pixels(watched_page, dashboard_url):
-    """A line with more points than pixel columns is drawn through its first, lowest, highest and
-    last point per column (app.browser_tuning): at most four points a column, and the same line on
-    the canvas. Measured 2026-12-02: of the line's pixels, 0.10 % (oscillation), 0 (smooth) and
-    0.64 % (gaps) differ by more than a quarter of full intensity: antialiasing at the joins."""
-    page = watched_page
-    open_dashboard(page, dashboard_url)
-    result = page.evaluate(_M4_JS)
-    assert result.pop("no_going_back") is False  # x going back: left to BokehJS's own drawing
-    for name, r in result.items():
-        assert r["points_m4"] <= 4 * 1300 < r["points_whole"], (name, r)
-        assert r["differ"] <= 0.01 * r["inked"], (name, r)
-    assert page.evaluate("() => Bokeh.require('models/glyphs/line').LineView.prototype.__amra_m4") is True
-
-
-def test_live_plots_range_over_their_data_without_a_search_tree_per_batch(watched_page, dashboard_url):
-    """Each streamed batch used to make every line of the live plots build a search tree of all its
-    points (a fifth of the page's time at 12 000 rows); the ranges need only the bounding box,
-    which is what the page now finds (app.browser_tuning). The ranges must still cover the data."""
-    page = watched_page
-    open_dashboard(page, dashboard_url + "?run_s=30&speed=1")
-    page.evaluate(_COUNT_TREES_JS)
+    open_dashboard(page, dashboard_server[0] + "?run_s=40&speed=10")
     page.locator(".amra-run button").click()
-    wait_for(lambda: (streamed(page)[1] or 0) > 3.0, 60, what="3 s of run")
-    page.locator(".amra-stop button").click()
-    page.wait_for_timeout(1500)  # the last batch drawn
-    batches, trees = page.evaluate("() => [window.__amraBatches, window.__amraTrees]")
-    # five lines per batch before; now only the other plots' glyphs (the map's cells, the disc)
-    assert batches >= 5 and trees < batches, (batches, trees)
-    ranges = page.evaluate(_LIVE_RANGES_JS)
-    assert {r["field"] for r in ranges} == {"omega_rad_s", "teeter_deg", "twist0_deg", "twist1_deg", "descent_m_s"}
-    for r in ranges:
-        assert r["start"] <= r["y_min"] and r["end"] >= r["y_max"], r
-        assert r["x_end"] >= r["t_max"], r
+    expect(page.locator(".amra-verdict[data-final='true']")).to_be_visible(timeout=120_000)
+    d = _session(dashboard_server)
+    wait_for(lambda: (streamed(page)[1] or 0) > 39.9, 30, what="the end of the run in the page")
+    points = page.evaluate(_LIVE_POINTS_JS)
+    assert set(points) == {"omega_rad_s", "teeter_deg", "twist0_deg", "descent_m_s"}, points
+    assert all(p["n"] <= 2000 for p in points.values()), points
+    assert len(d.live.frame()) == len(d.last_history) > 10_000  # the server keeps every row
+    # box zoom on the teeter plot over about a second: the page then holds every row of that range
+    page.locator(".bk-tool-icon-box-zoom").nth(1).click()
+    a, b = plot_point(page, "Teeter angle", 20.0, 0.0), plot_point(page, "Teeter angle", 21.0, 0.0)
+    y_top = a[1] - 60
+    page.mouse.move(a[0], y_top)
+    page.mouse.down()
+    page.mouse.move(b[0], y_top + 120, steps=5)
+    page.mouse.up()
+    wait_for(lambda: d.live.zoom is not None, 20, what="the zoom to reach the server")
+    t0, t1 = d.live.zoom
+    teeter = wait_for(lambda: (page.evaluate(_LIVE_POINTS_JS)["teeter_deg"]["t_max"] < 30) and
+                      page.evaluate(_LIVE_POINTS_JS)["teeter_deg"], 20, what="the zoomed rows in the page")
+    whole = d.live.frame()
+    inside = int(((whole["t_s"] >= t0) & (whole["t_s"] <= t1)).sum())
+    shown = d.live.shown(1)["t_s"]
+    assert 300 <= inside == int(((shown >= t0) & (shown <= t1)).sum()), (t0, t1, inside)  # full resolution
+    assert teeter["n"] == len(shown)
+    shot(page, "02b-zoomed")
+    page.locator(".bk-tool-icon-reset").nth(1).click()
+    wait_for(lambda: d.live.zoom is None, 20, what="the reset")
     assert page.amra_errors == []
 
 
@@ -311,16 +171,13 @@ def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_se
                 raise
     after = wait_for(lambda: streamed(page)[2] != 1500 and streamed(page), 60, what="points with the new GJ")
     assert after[2] < 1500 and after[1] > before[1]  # the same run continued with a softer blade
-    assert d.controls.gj_nm2 == after[2] and d.worker.running
-    # flow control: the browser confirmed the batches it drew (at most two in flight, and a batch
-    # sent on the 1 s timeout is the exception)
-    h = d.histories
-    assert h.flow_control and h.batches_confirmed >= 5, (h.batches_sent, h.batches_confirmed)
-    assert h.batches_confirmed >= 0.8 * h.batches_sent - 1, (h.batches_sent, h.batches_confirmed)
+    assert d.controls.gj_nm2 == after[2] and d.session.running
+    exact = page.locator(".amra-gj input").first  # the exact input follows the slider (one parameter)
+    wait_for(lambda: float(exact.input_value()) == d.controls.gj_nm2, 10, what="the exact input to follow")
     expect(page.get_by_text("applied live at t =").first).to_be_visible(timeout=10_000)
     shot(page, "03-gj-changed-mid-run")
     page.locator(".amra-stop button").click()
-    wait_for(lambda: not d.worker.running, 20, what="the stop")
+    wait_for(lambda: not d.session.running, 20, what="the stop")
 
 
 def _value_events(page) -> list:
@@ -369,7 +226,7 @@ def test_a_dragged_slider_sends_its_value_once_on_release(watched_page, dashboar
 def test_fig10_preset_ends_unstable(watched_page, dashboard_url):
     page = watched_page
     open_dashboard(page, dashboard_url + "?preset=fig10&run_s=6&speed=6")
-    expect(page.get_by_text("Paper Fig. 10").first).to_be_visible(timeout=30_000)
+    expect(page.get_by_text("The paper:").first).to_be_visible(timeout=30_000)
     page.locator(".amra-run button").click()
     card = page.locator(".amra-verdict[data-final='true']")
     expect(card).to_be_visible(timeout=90_000)
@@ -385,7 +242,8 @@ def test_map_fills_in_and_clicking_a_cell_loads_it(watched_page, dashboard_serve
     wait_for(lambda: values.append(progress_value(page)) or (values[-1] is not None and values[-1] >= 100), 180,
              every_s=0.2, what="the map to complete")
     seen = [v for v in values if v is not None]
-    assert min(seen) < 100 and seen[-1] == 100 and sorted(seen) == seen  # advancing
+    # progress only ever advances (a fast machine may finish the map before the first look)
+    assert seen[-1] == 100 and sorted(seen) == seen, seen
     n = wait_for(lambda: map_cells(page) >= 9 and map_cells(page), 30, what="the cells in the plot")
     d = _session(dashboard_server)
     assert n == len(d.map.cells)
@@ -397,7 +255,7 @@ def test_map_fills_in_and_clicking_a_cell_loads_it(watched_page, dashboard_serve
     xy = plot_point(page, "Stability boundary map", 100 * target.cg, target.gj_nm2)
     assert xy is not None
     page.mouse.click(*xy)
-    wait_for(lambda: d.controls.gj_nm2 == target.gj_nm2, 20, what="the clicked cell to load")
+    wait_for(lambda: d.controls.gj_nm2 == float(f"{target.gj_nm2:.3g}"), 20, what="the clicked cell to load")
     assert d.controls.cg_pct == pytest.approx(100 * target.cg)
     expect(page.get_by_text("loaded map cell").first).to_be_visible(timeout=10_000)
     shot(page, "06-map-cell-loaded")
@@ -437,6 +295,6 @@ def test_closing_the_page_stops_the_run(watched_page, dashboard_server):
     page.locator(".amra-run button").click()
     wait_for(lambda: streamed(page)[0] > 0, 60, what="the run")
     d = _session(dashboard_server)
-    assert d.worker.running
+    assert d.session.running
     page.close()
-    wait_for(lambda: not d.worker.running, 30, what="the worker to stop after the session closed")
+    wait_for(lambda: not d.session.running, 30, what="the run to stop after the session closed")

@@ -125,17 +125,23 @@ def test_simulate_csv_header_carries_units(simulate_run):
     d, path = simulate_run
     assert d["csv"] == str(path)
     with open(path, newline="") as fh:
-        header = next(csv.reader(fh))
+        lines = fh.read().splitlines()
+    meta = [ln for ln in lines if ln.startswith("#")]
+    assert lines[:len(meta)] == meta  # the case's parameters first, as "# key: value" lines
+    assert meta[0].startswith("# AMRA ") and "# rotor: mccutcheon" in "\n".join(meta)
+    assert any(ln.startswith("# fidelity: rigid") for ln in meta) and any(ln.startswith("# verdict: ") for ln in meta)
+    header = next(csv.reader([lines[len(meta)]]))
     assert tuple(header) == HISTORY_COLUMNS
     for name in header:
         assert UNIT_SUFFIX.search(name), f"column {name!r} does not carry a unit"
-    data = np.loadtxt(path, delimiter=",", skiprows=1)
+    data = np.loadtxt(path, delimiter=",", skiprows=len(meta) + 1)
+    assert max(len(v) for v in lines[-1].split(",")) <= 15  # 8 significant digits, no 17-digit noise
     assert data.shape[1] == len(header) and data.shape[0] > 100
     assert np.isfinite(data).all()
     t = data[:, header.index("t_s")]
     assert t[0] == 0.0 and np.all(np.diff(t) > 0) and t[-1] <= d["sim_time_s"] + 1e-9
     om = data[:, header.index("omega_rad_s")]
-    assert om[0] == pytest.approx(d["omega_trim_rad_s"], rel=1e-9)
+    assert om[0] == pytest.approx(d["omega_trim_rad_s"], rel=5e-8)  # written to 8 significant digits
 
 
 # ---------------------------------------------------------------------------------------------

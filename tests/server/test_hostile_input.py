@@ -157,27 +157,29 @@ def test_upload_size_cap_and_websocket_cap(monkeypatch):
 
 
 def test_one_session_cannot_stop_or_see_another_run(tmp_path):
-    from app.dashboard import Dashboard
-    from app.settings import ServerSettings
+    from app.app import Dashboard
+    from app.server.settings import ServerSettings
     s = ServerSettings(tmp_path / "store.sqlite")
     a, b = Dashboard(s, registry=None), Dashboard(s, registry=None)
     try:
         a.controls.run_s = 30
         assert a.start_run()
         deadline = time.monotonic() + 60
-        while a.pump() == 0 and time.monotonic() < deadline:
+        while a.live.sent_rows == 0 and time.monotonic() < deadline:
+            a.pump()
             time.sleep(0.05)
-        assert a.worker.running
-        b.stop_run()
-        b.reset()
+        assert a.session.running
+        b.controls.param.trigger("stop")
+        b.controls.param.trigger("reset")
         b.close()
         time.sleep(0.5)
-        assert a.worker.running, "another session's Stop/Reset/close stopped this run"
-        assert b.histories.sent_rows == 0 and len(b.histories.frame()) == 0
-        assert a.worker is not b.worker and a.outbox is not b.outbox and a.histories is not b.histories
-        n = a.pump()
+        assert a.session.running, "another session's Stop/Reset/close stopped this run"
+        assert b.live.sent_rows == 0 and len(b.live.frame()) == 0
+        assert a.session is not b.session and a.live is not b.live
+        n = a.live.sent_rows
         time.sleep(0.3)
-        assert a.pump() + n > 0
+        a.pump()
+        assert a.live.sent_rows > n
     finally:
         a.close()
         b.close()

@@ -24,8 +24,21 @@ pytestmark = pytest.mark.slow
 TAG = "localhost/amra:test"
 
 
+#: where Debian installs the tools (debootstrap is in /usr/sbin, often missing from a user's PATH)
+TOOL_PATH = os.pathsep.join([os.environ.get("PATH", ""), "/usr/local/sbin", "/usr/sbin", "/sbin"])
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _sbin_on_path():
+    """The build script and buildah's helpers find the tools in /usr/sbin even when PATH lacks it."""
+    old = os.environ.get("PATH", "")
+    os.environ["PATH"] = TOOL_PATH
+    yield
+    os.environ["PATH"] = old
+
+
 def _need_tools():
-    missing = [t for t in ("buildah", "debootstrap") if shutil.which(t) is None]
+    missing = [t for t in ("buildah", "debootstrap") if shutil.which(t, path=TOOL_PATH) is None]
     if missing:
         pytest.fail(f"missing {', '.join(missing)}: scripts/test.sh installs them (apt-get install buildah debootstrap)")
     if os.geteuid() != 0:

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import urllib.parse
 import urllib.request
+from pathlib import Path
 from http.cookiejar import CookieJar
 
 import pytest
@@ -167,3 +168,11 @@ def test_help_lists_the_variables():
     for var in ("AMRA_PORT", "AMRA_STORE", "AMRA_NUM_PROCS", "AMRA_ALLOW_WEBSOCKET_ORIGIN", "AMRA_BASIC_AUTH",
                 "AMRA_DASK_SCHEDULER", "AMRA_MAX_RUN_S"):
         assert var in out
+
+
+def test_the_validation_report_is_served_beside_the_app():
+    """The page's help links validation/report.html: amra serve serves docs/validation there."""
+    argv, _ = build_command(resolve(type("A", (), {})(), {}), {})
+    (spec,) = flag_values(argv, "--static-dirs")
+    name, folder = spec.split("=", 1)
+    assert name == "validation" and (Path(folder) / "report.html").is_file()

@@ -1,0 +1,83 @@
+"""Exports that stand alone: a file name that says which case it holds, and a CSV whose header
+lines (``# key: value``) carry the case's parameters and the solver version, with numbers written
+to sensible precision (8 significant digits: a relative resolution of 1e-8, finer than the
+integrator's own accuracy (see ``amra bench``) so decays can still be fitted from the file, without
+the 17-digit round-off noise of a float's full repr). Read back with ``numpy.loadtxt(f, delimiter=",", skiprows=...)``,
+``pandas.read_csv(f, comment="#")`` or any spreadsheet (the ``#`` lines are text).
+"""
+from __future__ import annotations
+
+import io
+import math
+import re
+from typing import Iterable, Mapping
+
+import numpy as np
+
+from . import __version__
+
+#: significant digits of exported numbers
+EXPORT_DIGITS = 8
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return "" if not math.isfinite(v) else f"{v:.{EXPORT_DIGITS}g}"
+    return str(v)
+
+
+def file_name(kind: str, *, case: str = "", fidelity: str = "", gj_nm2: float | None = None,
+              cg_pct: float | None = None, mu: float | None = None, extension: str = "csv") -> str:
+    """``amra-fig10-rigid-gj100-cg40.csv``-style names: the kind or case label, fidelity, GJ
+    [N m^2/rad], CG [% chord] and, in forward flight, mu; characters outside [a-z0-9.-] dropped."""
+    parts = ["amra", case or kind]
+    if fidelity:
+        parts.append(fidelity)
+    if gj_nm2 is not None:
+        parts.append(f"gj{gj_nm2:.4g}")
+    if cg_pct is not None:
+        parts.append(f"cg{cg_pct:.3g}")
+    if mu:
+        parts.append(f"mu{mu:.3g}")
+    if case and kind not in case:
+        parts.append(kind)
+    slug = "-".join(re.sub(r"[^a-z0-9.-]+", "", p.lower().replace(" ", "")) for p in parts if p)
+    return f"{slug}.{extension}"
+
+
+def header_lines(meta: Mapping[str, object]) -> list[str]:
+    """``# key: value`` lines: the solver version first, then ``meta`` in its order."""
+    lines = [f"# AMRA {__version__}"]
+    lines += [f"# {k}: {_fmt(v)}" for k, v in meta.items()]
+    return lines
+
+
+def table_csv(columns: Iterable[str], rows, meta: Mapping[str, object] | None = None) -> str:
+    """A CSV text: header lines from ``meta``, one line of column names (units in the names), then
+    ``rows`` (a 2-D array or a list of rows: floats to :data:`EXPORT_DIGITS` digits, blank where not
+    finite)."""
+    out = io.StringIO()
+    for line in header_lines(meta or {}):
+        out.write(line + "\n")
+    out.write(",".join(columns) + "\n")
+    for row in (rows.tolist() if isinstance(rows, np.ndarray) else rows):
+        out.write(",".join(_fmt(float(v) if isinstance(v, (int, float, np.floating)) and not isinstance(v, bool)
+                                else v) for v in row) + "\n")
+    return out.getvalue()
+
+
+def case_meta(case, changes: Iterable[str] = (), verdict: str | None = None) -> dict:
+    """The parameters of a :class:`~amra_core.simulation.Case` for a header, in the page's units
+    (GJ N m^2/rad, EA and CG % chord, mu, s)."""
+    fl, se = case.flight, case.settings
+    meta = {"rotor": case.rotor.name, "gj_nm2 (span mean)": float(case.rotor.stations.mean("gj_nm2")),
+            "ea_pct_chord (span mean)": 100 * float(case.rotor.stations.mean("x_ea")),
+            "cg_pct_chord (span mean)": 100 * float(case.rotor.stations.mean("x_cg")),
+            "fidelity": se.fidelity, "aero": se.aero, "inflow": se.inflow,
+            "mu": float(fl.mu or 0.0), "airspeed_m_s": float(fl.airspeed_m_s or 0.0),
+            "run_s": float(case.t_end_s), "case_key": case.key()}
+    for i, text in enumerate(changes):
+        meta[f"change {i + 1}"] = text
+    if verdict:
+        meta["verdict"] = verdict
+    return meta

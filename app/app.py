@@ -1,0 +1,367 @@
+"""One session's dashboard: the :class:`Dashboard` viewer composes the controls, the session and
+the views, and turns the controls' actions into work.
+
+Reading order for a newcomer: :mod:`app.controls` (what the user sets: the single source of
+truth), :mod:`app.session` (the run thread and the events it posts, :mod:`app.events`), then
+each view in :mod:`app.live` and :mod:`app.views` (each subscribes to the events it draws).
+Server-wide parts (map jobs, process pools, settings) are in :mod:`app.server`.
+"""
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+import panel as pn
+
+from amra_core.boundary import MapSpec
+from amra_core.paper_cases import NOMINAL_GJ_NM2
+
+from . import compute, exports
+from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
+from .inputs import checked_input, tooltip
+from .events import Applied, Finished, Fan, Ladder, Locus, ModeFrames, Modes, Notice, Rows
+from .live import LivePlots, columns_from_rows
+from .presets import PRESETS
+from .rotor_upload import UploadError, parse_rotor_upload
+from .server.pool import LatestTasks, get_analysis_pool
+from .server.settings import ServerSettings
+from .session import Session
+from .throttle import Throttle
+from .views.disc import DiscView
+from .views.fan import FanView
+from .views.ladder import LadderView
+from .views.map import MapView
+from .views.modes import ModesView
+from .views.help import HelpView
+from .views.rotor import LiveRotor
+from .views.status import StatusView, run_html
+
+TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
+CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
+                   "aero", "inflow", "map_columns", "map_coarse")
+MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
+REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
+
+
+PAPER_CG = 0.40  #: the paper's CG (Figs 10-13) [chord fraction]: every map has a column there
+
+
+def map_columns(n: int) -> tuple:
+    """``n`` CG columns [chord fractions] from 20 to 50 % chord, always including the paper's 40 %."""
+    cgs = {round(float(x), 4) for x in np.linspace(0.20, 0.50, n)}
+    return tuple(sorted(cgs | {PAPER_CG}))
+
+
+def case_label(c: Controls, scenario) -> str:
+    """One line naming a run's case, for its verdict card."""
+    flight = f"μ {c.mu:g}" if not c.airspeed_m_s else f"{c.airspeed_m_s:g} m/s"
+    gj = (f"GJ {NOMINAL_GJ_NM2:g} → {c.gj_nm2:.4g} N m²/rad at {c.soften_at_s:g} s" if scenario.changes
+          else f"GJ {c.gj_nm2:.4g} N m²/rad")
+    name = PRESETS[c.preset].label if c.preset != "custom" else c.rotor
+    return f"{name} · {c.fidelity} · {gj} · EA {c.ea_pct:g} % · CG {c.cg_pct:g} % · {flight}"
+
+
+def change_label(values: dict) -> str:
+    """Short text of a live change's new values (GJ [N m²/rad], EA and CG [% chord])."""
+    parts = [f"GJ {values['gj_nm2']:.4g}"] if values.get("gj_nm2") is not None else []
+    parts += [f"{n} {100 * values[k]:.3g}%" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if values.get(k) is not None]
+    return " ".join(parts)
+
+
+def teeter_amplitude_rad(history: np.ndarray) -> float:
+    """First-harmonic (1/rev) teeter amplitude [rad] over the last revolution of a history."""
+    from amra_core.simulation import COL
+    omega = max(float(history[-1, COL["omega_rad_s"]]), 1e-6)
+    last = history[history[:, COL["t_s"]] >= history[-1, COL["t_s"]] - 2 * np.pi / omega]
+    beta, psi = last[:, COL["teeter_rad"]], last[:, COL["azimuth_rad"]]
+    return float(np.hypot(2 * np.mean(beta * np.cos(psi)), 2 * np.mean(beta * np.sin(psi))))
+
+
+class Dashboard(pn.viewable.Viewer):
+    def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, run_pool=None,
+                 doc=None, **params):
+        super().__init__(**params)
+        self.settings = settings or ServerSettings.from_env()
+        self.controls = c = Controls(max_run_s=self.settings.max_run_s)
+        self.session = s = Session(doc, run_pool)
+        self.tasks = LatestTasks(s.post, pool if pool is not None else get_analysis_pool())
+        self.messages: list = []
+        self.alert = pn.pane.Alert("", alert_type="danger", visible=False, sizing_mode="stretch_width",
+                                   name="messages")
+        self.live = LivePlots()
+        self.status = StatusView(s, self.notify, doc)
+        self.modes, self.disc, self.fan, self.ladder = ModesView(s), DiscView(s), FanView(s, doc), LadderView(s)
+        self.rotor_view = LiveRotor(s)
+        self.exports = exports.ExportBar(self.history_csv, self.modes_csv, self.map_csv)
+        self.modes.on_pick = self.animate_mode
+        self.map = (MapView(registry, who=id(self), on_pick=self.load_cell, doc=doc) if registry is not None
+                    else None)
+        self.uploaded = None
+        self.last_history: Optional[np.ndarray] = None
+        self._locus_key = None
+        self.refresh = Throttle(self.refresh_analyses, REFRESH_PERIOD_S, doc)
+        s.subscribe(Rows, lambda ev: self.live.append(columns_from_rows(ev.rows, ev.gj_nm2)))
+        s.subscribe(Finished, self._finished)
+        s.subscribe(Applied, lambda ev: self.live.mark(ev.t_s, change_label(ev.values)))
+        self._run_preset = "custom"  #: the preset the current run was started with
+        s.subscribe(Notice, lambda ev: self.notify(ev.text, ev.level))
+        c.param.watch(self.start_run, "run")
+        c.param.watch(lambda e: s.stop(), "stop")
+        c.param.watch(self.reset, "reset")
+        c.param.watch(self.run_ladder, "ladder")
+        c.param.watch(self._on_live, list(LIVE_PARAMETERS))
+        c.param.watch(self._on_case, list(CASE_PARAMETERS))
+        c.param.watch(lambda e: s.set_speed(e.new), "speed")
+
+    # ------------------------------------------------------------------ messages
+    def notify(self, text: str, level: str = "error") -> None:
+        """A visible message: the alert pane (the last three messages, until Reset) and a toast."""
+        self.messages.append((level, text))
+        self.alert.alert_type = {"error": "danger", "warning": "warning", "info": "info"}.get(level, "danger")
+        self.alert.object = "\n\n".join(f"**{lv}:** {t}" for lv, t in self.messages[-3:])
+        self.alert.visible = True
+        if pn.state.curdoc is not None and pn.state.notifications is not None:
+            getattr(pn.state.notifications, level if level in ("error", "warning", "info") else "error")(
+                text, duration=6000)
+
+    # ------------------------------------------------------------------ actions
+    def start_run(self, *_) -> bool:
+        try:
+            scenario = self.controls.scenario(self.uploaded)
+        except Exception as exc:  # noqa: BLE001 - RotorError, SettingsError, ValueError
+            self.notify(f"cannot run this case: {exc}")
+            return False
+        self.live.clear()
+        self.status.reset()
+        self.messages.clear()  # each run starts with a clean message area
+        self.alert.visible = False
+        self.status.case = case_label(self.controls, scenario)
+        self.status.run.object = run_html("starting ...")
+        self.session.start(scenario.case, self.controls.speed, scenario.changes)
+        self._run_preset = self.controls.preset
+        self.exports.rename({"history": exports.names_for(self.controls)["history"]})
+        return True
+
+    def _finished(self, ev) -> None:
+        self.last_history = ev.history
+        ref = PRESETS[self._run_preset].teeter_reference_rad
+        if ref is not None and len(ev.history):
+            beta = teeter_amplitude_rad(ev.history)
+            self.status.note.object = (f"Teeter amplitude (1/rev, last revolution): this model {beta:.3f} rad; "
+                                       f"measured in flight {ref[0]:.3f} rad; original AMRA {ref[1]:.3f} rad")
+
+    def reset(self, *_) -> None:
+        self.session.forget()
+        self.live.clear()
+        self.ladder.previous = None
+        self.ladder.compare(None, None)
+        self.status.reset()
+        self.messages.clear()
+        self.alert.visible = False
+
+    def run_ladder(self, *_) -> None:
+        try:
+            cases = {fid: self.controls.case(self.uploaded, fidelity=fid) for fid in ("rigid", "fem-torsion",
+                                                                                     "fem-coupled")}
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"cannot run the ladder: {exc}")
+            return
+        self.ladder.info.object = "Running the case at rigid, fem-torsion and fem-coupled ..."
+        self.tasks.submit("ladder", Ladder, compute.run_ladder, cases)
+
+    def animate_mode(self, real_part_per_s: float, frequency_hz: float, label: str) -> None:
+        """Compute the frames of a mode of the current case's trim (analysis pool)."""
+        c = self.controls
+        try:
+            rotor, flight, settings = c.rotor_obj(self.uploaded), c.flight(), c.settings()
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"invalid case: {exc}")
+            return
+        self.tasks.submit("mode-frames", ModeFrames, compute.mode_frames, rotor, flight, settings,
+                          real_part_per_s, frequency_hz, label)
+
+    def upload(self, data: bytes, filename: str) -> bool:
+        try:
+            rotor = parse_rotor_upload(data, filename)
+        except UploadError as exc:
+            self.notify(str(exc))
+            return False
+        self.uploaded = rotor
+        if self.controls.rotor == UPLOADED:
+            self.refresh.kick()
+        else:
+            self.controls.rotor = UPLOADED
+        self.notify(f"rotor file {filename!r} loaded: {rotor.name}, R = {rotor.radius_m:g} m", "info")
+        return True
+
+    def load_cell(self, cell) -> None:
+        gj = float(f"{cell.gj_nm2:.3g}")  # the grid's resolution, not 487.58387005217355
+        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 1), gj_nm2=gj)
+        self.status.show(None, False)  # the card spoke of another case
+        self.notify(f"loaded map cell CG {100 * cell.cg:.1f} % chord, GJ {gj:g} N m²/rad "
+                    f"({cell.verdict}); press Run to simulate it", "info")
+
+    # ------------------------------------------------------------------ parameter changes
+    def _on_live(self, *events) -> None:
+        if self.session.running:
+            self.session.set_live(**self.controls.live_values())
+            c = self.controls
+            self.status.note.object = (f"applied live at the next chunk: GJ {c.gj_nm2:.4g} N m²/rad, "
+                                       f"EA {c.ea_pct:g} %, CG {c.cg_pct:g} %")
+
+    def _on_case(self, *events) -> None:
+        if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):
+            self.status.note.object = "this change takes effect at the next run (only GJ, EA and CG apply live)"
+        self.refresh.kick()
+
+    def map_spec(self) -> MapSpec:
+        c = self.controls
+        rotor = self.uploaded if c.rotor == UPLOADED else c.rotor
+        if rotor is None:
+            raise ValueError("no rotor file uploaded")
+        cgs = map_columns(c.map_columns)
+        return MapSpec(rotor=rotor, fidelity=c.fidelity, aero=c.aero, mu=float(c.mu), ea=c.ea_pct / 100.0,
+                       cg_values=cgs, gj_min=MAP_GJ_RANGE[0], gj_max=MAP_GJ_RANGE[1], n_coarse=c.map_coarse)
+
+    def refresh_analyses(self) -> None:
+        """Recompute the modes, root locus and fan plot; follow the map for the current case."""
+        c = self.controls
+        self.modes.set_gj(c.gj_nm2)
+        names = exports.names_for(c)
+        self.exports.rename({"modes": names["modes"], "map": names["map"]})
+        if self.map is not None:
+            self.map.mark(c.cg_pct, c.gj_nm2)
+        try:
+            rotor, flight, settings = c.rotor_obj(self.uploaded), c.flight(), c.settings()
+        except Exception as exc:  # noqa: BLE001
+            self.notify(f"invalid case: {exc}")
+            return
+        self.tasks.submit("modes", Modes, compute.modes_result, rotor, flight, settings)
+        key = (c.rotor, id(self.uploaded), c.ea_pct, c.cg_pct, flight, settings)
+        if key != self._locus_key:
+            self._locus_key = key
+            self.tasks.submit("locus", Locus, compute.locus_result, rotor, flight, settings, c.cg_pct / 100.0)
+        self.tasks.submit("fan", Fan, compute.fan_data, rotor, settings.fidelity)
+        if self.map is not None:
+            try:
+                self.map.follow(self.map_spec())
+            except Exception as exc:  # noqa: BLE001
+                self.notify(f"no map for this case: {exc}")
+
+    def pump(self) -> None:
+        """Run whatever is due now, in the caller's thread (tests and scripts without a server)."""
+        for throttle in (self.session.delivery, self.status.clock, self.fan.marker, self.refresh,
+                         *([self.map.redraw] if self.map is not None else [])):
+            throttle.run_due()
+
+    # ------------------------------------------------------------------ exports
+    def history_csv(self):
+        sim = self.session.sim
+        verdict = self.status.verdict.verdict if self.status.verdict is not None else None
+        return exports.history_csv(sim, self.last_history, verdict)
+
+    def modes_csv(self):
+        return exports.frame_csv(self.modes.frame, exports.controls_meta(self.controls))
+
+    def map_csv(self):
+        from .views.map import map_csv
+        return self.map.csv() if self.map is not None else map_csv([], complete=False)
+
+    # ------------------------------------------------------------------ lifecycle
+    def close(self, *args) -> None:
+        """The session ended: stop the run (without waiting), drop its analyses, leave the map."""
+        self.session.close()
+        for throttle in (self.status.clock, self.fan.marker, self.refresh,
+                         *([self.map.redraw] if self.map is not None else [])):
+            throttle.close()
+        self.tasks.close()
+        if self.map is not None:
+            self.map.release()
+
+    # ------------------------------------------------------------------ the page
+    def sidebar(self) -> pn.Column:
+        c = self.controls
+        explanation = pn.pane.Markdown(pn.bind(lambda p: PRESETS[p].explanation, c.param.preset),
+                                       sizing_mode="stretch_width", name="preset-explanation",
+                                       styles={"font-size": "90%"})
+        upload = pn.widgets.FileInput(accept=".toml", multiple=False, name="Rotor file (TOML)",
+                                      sizing_mode="stretch_width", css_classes=["amra-upload"])
+        upload.param.watch(lambda e: e.new is not None and self.upload(e.new, upload.filename or "upload.toml"),
+                           "value")
+
+        def w(cls, name, **kw):  # tooltip: the parameter's doc, unit and allowed range
+            tip = {"description": tooltip(c.param[name])} if "description" in cls.param else {}
+            return cls.from_param(c.param[name], **tip, **kw)
+
+        def num(name, **kw):  # typed numbers: a bad one gets a message under its input
+            return checked_input(c, name, **kw)
+        full, sel, slider = {"sizing_mode": "stretch_width"}, pn.widgets.Select, pn.widgets.FloatSlider
+        button = pn.widgets.Button.from_param
+        return pn.Column(
+            w(sel, "preset", **full), explanation, w(sel, "rotor", **full), upload,
+            gj_slider(c), num("gj_nm2", css_classes=["amra-gj"], **full),
+            w(slider, "ea_pct", **full), w(slider, "cg_pct", **full), w(slider, "mu", **full),
+            w(sel, "fidelity", **full),
+            pn.Row(w(sel, "aero", width=140), w(sel, "inflow", width=140)),
+            pn.Row(num("run_s", width=140, css_classes=["amra-run-s"]), num("speed", width=140,
+                                                                          css_classes=["amra-speed"])),
+            num("soften_at_s", css_classes=["amra-soften"], **full),
+            pn.Row(button(c.param.run, button_type="primary", css_classes=["amra-run"]),
+                   button(c.param.stop, button_type="warning", css_classes=["amra-stop"]),
+                   button(c.param.reset, button_type="light", css_classes=["amra-reset"])),
+            button(c.param.ladder, sizing_mode="stretch_width", css_classes=["amra-ladder"]),
+            pn.Card(num("airspeed_m_s"), num("omega_hold_rad_s"), num("map_columns", widget_cls=pn.widgets.IntInput),
+                    num("map_coarse", widget_cls=pn.widgets.IntInput), title="Advanced: flight and map grid",
+                    collapsed=True,
+                    sizing_mode="stretch_width"),
+            self.exports.panel(),
+            sizing_mode="stretch_width", name="sidebar")
+
+    def header(self) -> pn.Row:
+        """The header: the presentation toggle, and in presentation mode Run, Stop, a large GJ input and
+        the verdict in one line."""
+        c = self.controls
+        big = {"styles": {"font-size": "20px"}, "stylesheets": [":host input {font-size: 20px; height: 40px}"]}
+        button = pn.widgets.Button.from_param
+        live_bar = pn.Row(
+            button(c.param.run, button_type="primary", css_classes=["amra-present-run"], width=110, height=44,
+                   description=None),
+            button(c.param.stop, button_type="warning", width=110, height=44, description=None),
+            checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, **big),
+            pn.pane.Bokeh(self.status.badge.div, width=360), visible=c.present, margin=0)
+        c.param.watch(lambda e: setattr(live_bar, "visible", e.new), "present")
+        toggle = pn.widgets.Toggle.from_param(c.param.present, button_type="light", width=170,
+                                              css_classes=["amra-present"], margin=(10, 10))
+        return pn.Row(toggle, live_bar, sizing_mode="stretch_width")
+
+    def present(self, on: bool) -> None:
+        """Presentation mode on or off: taller live plots and larger fonts (the header shows Run, Stop,
+        GJ and the verdict; the top status row steps aside)."""
+        self.live.present(on)
+        self.top.visible = not on
+
+    def main(self) -> pn.Column:
+        self.top = top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"),
+                                sizing_mode="stretch_width", visible=not self.controls.present)
+        live = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
+                          sizing_mode="stretch_width")
+        self.live.present(self.controls.present)
+        self.controls.param.watch(lambda e: self.present(e.new), "present")
+        tabs = pn.Tabs(("Boundary map", self.map if self.map is not None else pn.pane.Markdown("map disabled")),
+                       ("Modes & root locus", self.modes), ("Live rotor", self.rotor_view),
+                       ("Rotor disc", self.disc), ("Fan plot", self.fan),
+                       ("Fidelity ladder", self.ladder), ("Help", HelpView(self.controls)), dynamic=True,
+                       sizing_mode="stretch_width", name="views")
+        # the plots are rendered after the first paint (Panel's defer_load)
+        return pn.Column(top, pn.panel(lambda: live, defer_load=True, sizing_mode="stretch_width"),
+                         pn.panel(lambda: tabs, defer_load=True, sizing_mode="stretch_width"),
+                         sizing_mode="stretch_width", name="main")
+
+    def __panel__(self):
+        # one root per template area (each root added to a document makes Bokeh recompute its
+        # references); no busy indicator (Panel's busy flag is per process: every session's events
+        # would spin every page's indicator)
+        title = "AMRA" if self.controls.present else TITLE  # room for the header's controls on a projector
+        return pn.template.BootstrapTemplate(title=title, sidebar=[self.sidebar()], main=[self.main()],
+                                             header=[self.header()], sidebar_width=330, header_background="#263238",
+                                             busy_indicator=None, collapsed_sidebar=self.controls.present)

@@ -1,0 +1,232 @@
+"""One browser session's run: the thread that advances it, and the news it hands to the views.
+
+The run thread trims the case (in the run process pool: the trim holds the GIL), advances the
+:class:`~amra_core.simulation.Simulation` in chunks paced to the playback speed, applies live
+GJ/EA/CG changes between chunks (``set_parameters``: the run continues from its state) and posts
+typed events (:mod:`app.events`). Views subscribe to the event types they draw; :meth:`deliver`
+hands them over on the event loop at most :data:`DELIVERY_PERIOD_S` apart, consecutive rows
+joined. :meth:`start`, :meth:`stop` and :meth:`close` only signal, never wait for a thread; a
+replaced run's late events are dropped by run id.
+"""
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from collections import defaultdict
+from typing import Optional
+
+import numpy as np
+
+from amra_core.pose import rotor_pose
+from amra_core.scenario import Scenario, apply_change
+from amra_core.simulation import Case, Simulation
+
+from .events import Applied, Disc, Finished, Notice, Pose, Rows, RunStatus, Started, VerdictNews
+from .throttle import Throttle
+
+TICK_S = 0.06  #: wall-clock period of a chunk [s]
+DELIVERY_PERIOD_S = 0.1  #: shortest interval between deliveries to the views [s]: 10 updates/s
+TRIM_PROGRESS_PERIOD_S = 0.5  #: period of the trim's progress line [s]
+VERDICT_PERIOD_S = 1.0  #: wall-clock period of the "so far" verdict and the disc during a run [s]
+log = logging.getLogger("amra.session")
+
+
+def new_simulation(case: Case) -> Simulation:
+    """The trimmed Simulation of ``case`` (run in the run pool: picklable in and out)."""
+    with np.errstate(all="ignore"):
+        return Simulation(case)
+
+
+class Session:
+    def __init__(self, doc=None, run_pool=None):
+        self._inbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._handlers: dict = defaultdict(list)
+        self.delivery = Throttle(self.deliver, DELIVERY_PERIOD_S, doc)
+        self.run_pool = run_pool
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+        self._pending: dict = {}
+        self._speed = 1.0
+        self.run_id = 0
+        self.sim: Optional[Simulation] = None
+        self._live_since: Optional[tuple] = None  #: (GJ, perf_counter) of a live change not yet delivered
+        self.live_latencies_s: list = []  #: live change received -> first rows with it sent [s]
+
+    # ------------------------------------------------------------------ news
+    def subscribe(self, event_type, handler) -> None:
+        self._handlers[event_type].append(handler)
+
+    def post(self, event) -> None:
+        """Queue an event for the views (any thread)."""
+        self._inbox.put(event)
+        self.delivery.kick()
+
+    def deliver(self) -> None:
+        """Hand the queued events to their subscribers, in order (event loop)."""
+        rows, pose = [], None
+        while True:
+            try:
+                ev = self._inbox.get_nowait()
+            except queue.Empty:
+                break
+            if getattr(ev, "run_id", self.run_id) != self.run_id:
+                continue  # from a run that was replaced
+            if isinstance(ev, Rows):
+                rows.append(ev)
+                continue
+            if isinstance(ev, Pose):  # only the latest shape is drawn
+                pose = ev
+                continue
+            self._dispatch_rows(rows)
+            rows = []
+            for handler in self._handlers[type(ev)]:
+                handler(ev)
+        self._dispatch_rows(rows)
+        if pose is not None:
+            for handler in self._handlers[Pose]:
+                handler(pose)
+
+    def _dispatch_rows(self, rows: list) -> None:
+        if not rows:
+            return
+        ev = rows[0] if len(rows) == 1 else Rows(rows[-1].run_id, np.concatenate([r.rows for r in rows]),
+                                                 rows[-1].gj_nm2, rows[-1].t_s)
+        for handler in self._handlers[Rows]:
+            handler(ev)
+        if self._live_since is not None and abs(ev.gj_nm2 - self._live_since[0]) <= 1e-9 * self._live_since[0]:
+            self.live_latencies_s.append(time.perf_counter() - self._live_since[1])
+            self._live_since = None
+            log.info("live change to GJ %.4g N m²/rad: first rows with it sent %.3f s after it reached "
+                     "the server", ev.gj_nm2, self.live_latencies_s[-1])
+
+    # ------------------------------------------------------------------ control (never waits)
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive() and not self._stop.is_set()
+
+    def start(self, case: Case, speed: float = 1.0, changes: tuple = ()) -> int:
+        """Start a run of ``case`` (the current one is told to stop), applying the scripted
+        ``changes`` (``amra_core.scenario.LiveChange``) at their times; returns its run id."""
+        self._stop.set()
+        with self._lock:
+            self.run_id += 1
+            self._pending, self._speed = {}, float(speed)
+            self._stop = stop = threading.Event()
+            run_id = self.run_id
+        self._thread = threading.Thread(target=self._loop, args=(case, tuple(changes), run_id, stop),
+                                        name=f"amra-run-{run_id}", daemon=True)
+        self._thread.start()
+        return run_id
+
+    def stop(self) -> None:
+        """Stop the run at its next chunk (does not wait)."""
+        self._stop.set()
+
+    def forget(self) -> None:
+        """Stop, and drop whatever the run still sends (Reset)."""
+        self._stop.set()
+        with self._lock:
+            self.run_id += 1
+
+    def close(self) -> None:
+        self.stop()
+        self.delivery.close()
+
+    def set_live(self, **values) -> None:
+        """Queue GJ [N m²/rad], EA and CG [chord fractions] for the running Simulation."""
+        with self._lock:
+            self._pending.update({k: v for k, v in values.items() if v is not None})
+        if "gj_nm2" in values:
+            self._live_since = (float(values["gj_nm2"]), time.perf_counter())
+
+    def set_speed(self, speed: float) -> None:
+        with self._lock:
+            self._speed = float(speed)
+
+    # ------------------------------------------------------------------ the run thread
+    def _take(self):
+        with self._lock:
+            pend, self._pending = self._pending, {}
+            return pend, self._speed
+
+    def _loop(self, case: Case, changes: tuple, run_id: int, stop: threading.Event) -> None:
+        post = self.post
+        post(RunStatus(run_id, "trimming", "finding the trimmed autorotation ..."))
+        try:
+            scenario = Scenario(case, changes)
+            if self.run_pool is not None:
+                fut, t0 = self.run_pool.submit(new_simulation, case), time.perf_counter()
+                while not fut.done():  # the trim's progress: its time so far, twice a second
+                    if stop.wait(TRIM_PROGRESS_PERIOD_S):
+                        return
+                    post(RunStatus(run_id, "trimming", f"finding the trimmed autorotation ... "
+                                                       f"{time.perf_counter() - t0:.0f} s"))
+                sim = fut.result()
+            else:
+                sim = new_simulation(case)
+        except Exception as exc:  # noqa: BLE001 - shown in the page, the session carries on
+            post(Notice(f"the run could not start: {exc}"))
+            post(RunStatus(run_id, "idle", "not started"))
+            return
+        if stop.is_set():
+            return
+        self.sim = sim
+        gj = float(np.mean(case.rotor.stations.gj_nm2))
+        post(Started(run_id, sim.start_note, sim.omega_ref))
+        post(RunStatus(run_id, "running", "running"))
+        post(Rows(run_id, sim.history, gj, sim.t))
+        t_end = case.t_end_s
+        next_tick = last_views = time.perf_counter()
+        try:
+            while not stop.is_set() and sim.status == "running" and sim.t < t_end - 1e-9:
+                pend, speed = self._take()
+                if pend:
+                    try:
+                        sim.set_parameters(**pend)
+                        gj = float(np.mean(sim.case.rotor.stations.gj_nm2))
+                        post(Applied(run_id, pend, sim.t))
+                    except Exception as exc:  # noqa: BLE001
+                        post(Notice(f"could not apply {pend} mid-run: {exc}"))
+                t_before, t_next = sim.t, scenario.next_change_s(sim.t) or t_end  # chunks end at a change
+                with np.errstate(all="ignore"):
+                    rows = sim.advance(span_s=max(min(speed * TICK_S, t_end - sim.t, t_next - sim.t), 1e-6))
+                post(Rows(run_id, rows, gj, sim.t))
+                for change in scenario.due(t_before, sim.t):
+                    apply_change(sim, change)
+                    gj = float(np.mean(sim.case.rotor.stations.gj_nm2))
+                    post(Applied(run_id, {"gj_nm2": change.gj_nm2, "scripted": True}, sim.t))
+                post(Pose(run_id, rotor_pose(sim.model, sim.y), sim.t))
+                if time.perf_counter() - last_views >= VERDICT_PERIOD_S:
+                    last_views = time.perf_counter()
+                    self._post_views(sim, run_id, final=False)
+                next_tick += TICK_S
+                delay = next_tick - time.perf_counter()
+                if delay > 0:
+                    stop.wait(delay)
+                else:
+                    next_tick = time.perf_counter()  # the solver is behind the playback speed
+        except Exception as exc:  # noqa: BLE001
+            post(Notice(f"the run failed at t = {sim.t:.2f} s: {exc}"))
+        self._post_views(sim, run_id, final=True)
+        status = "completed" if sim.status == "running" else sim.status
+        post(Finished(run_id, sim.history, status, stop.is_set(), sim.t))
+        post(RunStatus(run_id, "idle", f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s "
+                                       f"({status})"))
+
+    def _post_views(self, sim: Simulation, run_id: int, final: bool) -> None:
+        status = ("completed" if sim.status == "running" else sim.status) if final else sim.status
+        try:
+            with np.errstate(all="ignore"):
+                self.post(VerdictNews(run_id, sim.verdict(), final, status, sim.start_note))
+        except Exception as exc:  # noqa: BLE001 - too short a run to judge
+            if final:
+                self.post(Notice(f"no verdict: {exc}"))
+        try:
+            disc = sim.spanwise_last_revolution()
+            if disc:
+                self.post(Disc(run_id, disc))
+        except Exception:  # noqa: BLE001 - the disc plots are optional
+            pass

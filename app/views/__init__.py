@@ -1,0 +1,1 @@
+"""The dashboard's views: each subscribes to the session events it draws."""

@@ -1,0 +1,79 @@
+"""Help in the page: what each verdict and map class means, why a growth rate can be negative on an
+unstable case, what the controls mean, and where the paper and the validation report are."""
+from __future__ import annotations
+
+import panel as pn
+
+from ..inputs import tooltip
+
+PAPER_URL = "http://eprints.gla.ac.uk/4967/"
+REPORT_URL = "validation/report.html"  #: served beside the app by ``amra serve``
+
+VERDICTS = (
+    ("stable", "The kick dies out: rotor speed, teeter and twist return to the steady autorotation (or its "
+               "periodic motion in forward flight)."),
+    ("flutter", "An oscillation of teeter, twist and rotor speed grows (or saturates into a limit cycle, "
+                "reported with its amplitude). In autorotation it usually drags the rotor speed down."),
+    ("divergence", "A monotonic runaway: the twist grows without oscillating, or the rotor speed falls "
+                   "steadily towards zero."),
+    ("overspeed", "The rotor speed runs away upwards (a nose-down twist, e.g. with the CG ahead of the "
+                  "elastic axis, lowers the blade pitch and speeds the rotor up)."),
+    ("fold / no-autorotation", "No torque balance exists: the nose-up elastic twist has raised the blade pitch "
+                               "until the root stalls and drag wins. The rotor speed decays from the start; "
+                               "on the map, the fold GJ is the stiffness below which this happens."),
+    ("windmill-brake", "An equilibrium with a descent rate of 4-5 times the hover induced velocity and little "
+                       "inflow: real, but the paper's failure state (descent speed 'increases to an "
+                       "unacceptable value'), not autorotation."),
+    ("undetermined", "Too little data to judge: the run is shorter than a few cycles of its slowest mode, or "
+                     "it had not settled. Run longer; it is never counted as stable."),
+    ("numerical-failure", "The state became non-finite. Reported, never hidden: try a shorter step or another "
+                          "fidelity, and tell us the case."),
+)
+
+MAP_CLASSES = (
+    ("fold boundary", "Below this GJ no steady autorotation exists (the branch of trims ends)."),
+    ("strong flutter", "An unstable mode on the trim branch whose damping ratio is below minus the weak "
+                       "threshold: it sets the flutter GJ, and with the fold the critical GJ (the larger)."),
+    ("weak flutter window", "A narrow band just unstable (damping ratio about -0.01): real in the linear model, "
+                            "but a kick saturates at a fraction of a degree of twist. Drawn lighter; it does not "
+                            "move the critical GJ."),
+    ("overspeed branch", "The trim continues with a rising rotor speed past twice the hover induced velocity: "
+                         "the normal branch overspeeding, not the windmill-brake root."),
+)
+
+
+def _table(rows) -> str:
+    return "\n".join(f"| **{k}** | {v} |" for k, v in rows)
+
+
+def help_markdown(controls=None) -> str:
+    """The help text (Markdown); with ``controls``, each control's unit and allowed range too."""
+    parts = [
+        "### What the verdicts mean", "| verdict | meaning |", "|---|---|", _table(VERDICTS),
+        "### What the map shows", "| class | meaning |", "|---|---|", _table(MAP_CLASSES),
+        "### Why a growth rate can be negative on an unstable case",
+        "The growth rate is fitted to the envelope of the motion *since the last change*. A case whose "
+        "rotor speed collapses (fold, divergence) can have a decaying oscillation on top of the collapse, "
+        "so its oscillation's growth rate is negative while the rotor is lost: read the verdict and the "
+        "collapse time, not the sign alone. Likewise in forward flight a Floquet exponent's frequency is "
+        "only defined modulo the rotor frequency.",
+        "### Where this comes from",
+        f"The model re-implements Trchalík, Gillies & Thomson (2008), *Development of an aeroelastic stability "
+        f"boundary for a rotor in autorotation* ([the paper]({PAPER_URL})). How this model compares with "
+        f"analytic results, published data and the paper is in the [validation report]({REPORT_URL}).",
+    ]
+    if controls is not None:
+        rows = [(controls.param[n].label, tooltip(controls.param[n]))
+                for n in ("gj_nm2", "ea_pct", "cg_pct", "mu", "fidelity", "aero", "inflow", "run_s", "soften_at_s",
+                          "speed")]
+        parts += ["### The controls", "| control | meaning, unit and allowed range |", "|---|---|", _table(rows)]
+    return "\n\n".join(parts)
+
+
+class HelpView(pn.viewable.Viewer):
+    def __init__(self, controls=None, **params):
+        super().__init__(**params)
+        self.text = help_markdown(controls)
+
+    def __panel__(self):
+        return pn.pane.Markdown(self.text, sizing_mode="stretch_width", name="help", css_classes=["amra-help"])

@@ -1,0 +1,102 @@
+"""The fidelity ladder (the paper's central comparison): the same case at rigid, fem-torsion and
+fem-coupled, run side by side (unpaced, in the analysis process: :func:`app.analysis.run_ladder`)
+and overlaid with a legend, with each run's verdict; and the previous run overlaid (dashed) on the
+one that just finished."""
+from __future__ import annotations
+
+import holoviews as hv
+import numpy as np
+import pandas as pd
+import panel as pn
+from holoviews.streams import Pipe
+
+from amra_core.shapes import FIDELITIES
+
+from ..compute import LADDER_POINTS as MAX_POINTS
+from ..events import Finished, Ladder
+from ..live import UNITS, columns_from_rows
+
+DIMS = {c: hv.Dimension(c, label=name, unit=unit) for c, (name, unit) in UNITS.items()}
+
+COLOURS = {"rigid": "#1565c0", "fem-torsion": "#ef6c00", "fem-coupled": "#6a1b9a", "previous run": "#9e9e9e",
+           "last run": "#1f77b4"}
+
+
+COMPARED = ("previous run", "last run")
+
+
+class LadderView(pn.viewable.Viewer):
+    def __init__(self, session, **params):
+        super().__init__(**params)
+        self.pipe = Pipe(data={})
+        self.table = pn.pane.DataFrame(pd.DataFrame(), index=False, sizing_mode="stretch_width", name="ladder-table")
+        self.info = pn.pane.Markdown("Press **Run fidelity ladder** to run the current case at the three "
+                                     "fidelities.", name="ladder-info")
+        self.compare_pipe = Pipe(data={})
+        self.previous = None  #: the last finished run, as a frame of app.live.COLUMNS
+        session.subscribe(Ladder, lambda ev: self.show(ev.result))
+        session.subscribe(Finished, self._finished)
+
+    def _finished(self, ev: Finished) -> None:
+        if len(ev.history):
+            frame = pd.DataFrame(columns_from_rows(ev.history, float("nan")))
+            self.compare(self.previous, frame)
+            self.previous = frame
+
+    def compare(self, previous, current) -> None:
+        """Overlay the previous run on the one that just finished (frames of :data:`app.live.COLUMNS`)."""
+        runs = {}
+        for label, f in (("previous run", previous), ("last run", current)):
+            if f is not None and len(f):
+                idx = np.linspace(0, len(f) - 1, min(MAX_POINTS, len(f))).astype(int)
+                g = f.iloc[idx]
+                runs[label] = {"t": g["t_s"].to_numpy(), "omega": g["omega_rad_s"].to_numpy(),
+                               "teeter_deg": g["teeter_deg"].to_numpy(), "twist_deg": g["twist0_deg"].to_numpy()}
+        self.compare_pipe.send(runs)
+
+    def show(self, result: dict) -> None:
+        self.info.object = "Fidelity ladder: the current case at the three fidelities."
+        self.pipe.send(result["runs"])
+        self.table.object = verdict_table(result["verdicts"])
+
+    def _plot(self, runs, key, dim, title, labels=FIDELITIES):
+        # the same layers every time, empty where a run is missing (a DynamicMap draws only the layers
+        # of its first overlay)
+        layers = []
+        for fid in labels:
+            r = runs.get(fid)
+            data = (r["t"], r[key]) if r is not None else ([], [])
+            layers.append(hv.Curve(data, DIMS["t_s"], dim, label=fid).opts(
+                color=COLOURS[fid], line_width=2, line_dash="dashed" if fid == "previous run" else "solid",
+                framewise=True))  # each new set of runs sets the axes (framewise is an element option)
+        return hv.Overlay(layers).opts(title=title, responsive=True, height=260, show_grid=True,
+                                       legend_position="top_left", framewise=True)
+
+    def __panel__(self):
+        specs = (("omega", DIMS["omega_rad_s"], "Rotor speed by fidelity"),
+                 ("teeter_deg", DIMS["teeter_deg"], "Teeter by fidelity"),
+                 ("twist_deg", DIMS["twist0_deg"], "Tip twist (blade 0) by fidelity"))
+        plots = [pn.pane.HoloViews(hv.DynamicMap(lambda data, s=s: self._plot(data, *s), streams=[self.pipe]),
+                                   sizing_mode="stretch_width") for s in specs]
+        compare = [pn.pane.HoloViews(hv.DynamicMap(lambda data, s=s: self._plot(data, s[0], s[1], s[2].replace(
+            "by fidelity", "previous vs last run"), COMPARED), streams=[self.compare_pipe]),
+            sizing_mode="stretch_width") for s in specs]
+        return pn.Column(
+            pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"), pn.Row(*compare),
+            pn.pane.Markdown("### Fidelity ladder: the same case at the three fidelities"),
+            self.info, self.table, pn.Row(*plots), sizing_mode="stretch_width")
+
+
+def _num(x, unit: str = "") -> str:
+    return "—" if x is None or not np.isfinite(x) else f"{x:.3g}{unit}"
+
+
+def verdict_table(rows) -> pd.DataFrame:
+    """The ladder's verdicts, numbers to 3 significant digits, "—" where there is none."""
+    return pd.DataFrame([(fid, verdict, _num(g), _num(f), _num(c), text) for fid, verdict, g, f, c, text in rows],
+                        columns=["fidelity", "verdict", "growth rate [1/s]", "frequency [Hz]", "collapse time [s]",
+                                 "explanation"])
+
+
+def ladder_cases(controls, uploaded) -> dict:
+    return {fid: controls.case(uploaded, fidelity=fid) for fid in FIDELITIES}

@@ -1,0 +1,251 @@
+"""The boundary map (paper Fig. 14) for the current EA, μ, fidelity and aerodynamics, filling in.
+
+Cells come from the session's subscription to the server-wide :class:`app.server.map_jobs.MapJob`
+(stored cells at once, new ones as they finish): the job calls back on every change, and the view
+redraws at most every :data:`REDRAW_S` seconds (:class:`app.throttle.Throttle`); nothing runs
+while the map is idle. A progress bar counts the cells. The current (CG, GJ) is a star; the
+critical-GJ lines of every fidelity computed so far for the same case are overlaid with a legend.
+Clicking the map loads the nearest cell's (CG, GJ) into the controls.
+
+The plot is a plain Bokeh figure on three data sources (cells, boundary lines, marker), not a
+HoloViews overlay: a redraw streams the new cells into their source. The boundary lines are
+drawn by :meth:`MapView.draw_boundaries`, the one place to change when the map shows more
+boundaries per fidelity.
+"""
+from __future__ import annotations
+
+import csv
+import html
+import io
+import math
+
+import numpy as np
+import pandas as pd
+import panel as pn
+from bokeh.events import Tap
+from bokeh.models import CDSView, ColumnDataSource, GroupFilter, HoverTool, Legend, LegendItem, Range1d
+from bokeh.plotting import figure
+
+from amra_core.boundary import MapSpec, cell_class
+from amra_core.stability import CellResult
+
+from ..throttle import Throttle
+from .status import Text
+
+CG_LABEL = "CG [% chord]"
+GJ_LABEL = "GJ [N m²/rad]"
+CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "windmill-brake": "#90a4ae",
+                 "failed": "#212121"}
+FIDELITY_STYLE = {"rigid": ("#1565c0", "solid"), "fem-torsion": ("#ef6c00", "dashed"),
+                  "fem-coupled": ("#6a1b9a", "dotdash")}
+REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the map [s]
+BUSY_RETRY_MS = 5000  #: a map refused as "server busy" is asked for again after this [ms]
+
+
+CELL_COLUMNS = ("cg_pct", "gj_nm2", "class", "verdict", "growth_rate_per_s", "colour")
+
+
+def cells_frame(cells) -> pd.DataFrame:
+    rows = [(100.0 * c.cg, c.gj_nm2, cell_class(c), c.verdict,
+             np.nan if c.growth_rate_per_s is None else c.growth_rate_per_s) for c in cells]
+    frame = pd.DataFrame(rows, columns=list(CELL_COLUMNS[:-1]))
+    frame["colour"] = [CLASS_COLOURS.get(k, CLASS_COLOURS["failed"]) for k in frame["class"]]
+    return frame
+
+
+def _columns(frame: pd.DataFrame) -> dict:
+    # text columns as lists of str: an empty (float) array as a colour column is "invalid color array"
+    return {c: [str(v) for v in frame[c]] if c in ("class", "verdict", "colour") else frame[c].to_numpy(dtype=float)
+            for c in CELL_COLUMNS}
+
+
+def nearest_cell(cells, cg_pct: float, gj: float):
+    """The cell nearest to a click at (CG [% chord], GJ [N m^2/rad]), distance in column widths and
+    decades of GJ."""
+    if not cells or gj is None or cg_pct is None or not gj > 0:
+        return None
+    cgs = sorted({c.cg for c in cells})
+    dcg = (cgs[-1] - cgs[0]) / max(len(cgs) - 1, 1) * 100.0 if len(cgs) > 1 else 10.0
+    return min(cells, key=lambda c: ((100 * c.cg - cg_pct) / dcg) ** 2 + (4 * math.log10(c.gj_nm2 / gj)) ** 2)
+
+
+class Eta:
+    """Time left of a filling map [s], from the rate of computed (not stored) cells so far."""
+
+    def __init__(self):
+        import time
+        self._clock = time.monotonic
+        self._t0 = None
+
+    def update(self, computed: int, remaining: int, running: bool) -> str:
+        """``", about N s left"`` once a few cells were computed while running ('' otherwise)."""
+        if not running or remaining <= 0:
+            return ""
+        if self._t0 is None:
+            self._t0 = (self._clock(), computed)
+            return ""
+        elapsed, done = self._clock() - self._t0[0], computed - self._t0[1]
+        if done < 3 or elapsed <= 0:
+            return ""
+        left = remaining * elapsed / done
+        return f", about {left:.0f} s left" if left < 120 else f", about {left / 60:.0f} min left"
+
+
+def map_csv(cells, spec=None, complete: bool = True) -> io.StringIO:
+    """The map's cells, CG in % chord as on the page, numbers to 8 digits; the map's case and
+    whether it is complete in ``#`` lines above (a half-finished map says so)."""
+    from amra_core.export import table_csv
+    fields = [k for k in CellResult.__dataclass_fields__ if k != "cg"]
+    meta = {"complete": "yes" if complete else f"NO: {len(cells)} cells so far, the map was still filling"}
+    if spec is not None:
+        meta |= {"fidelity": spec.fidelity, "aero": spec.aero, "ea_pct_chord": 100 * spec.ea, "mu": spec.mu,
+                 "cg_columns_pct_chord": " ".join(f"{100 * c:g}" for c in spec.cg_values)}
+    rows = [[100.0 * c.cg] + ["" if getattr(c, k) is None else getattr(c, k) for k in fields]
+            for c in sorted(cells, key=lambda c: (c.cg, c.gj_nm2))]
+    return io.StringIO(table_csv(["cg_pct_chord", *fields], rows, meta))
+
+
+class MapView(pn.viewable.Viewer):
+    def __init__(self, registry, who, on_pick, doc=None, **params):
+        super().__init__(**params)
+        self.doc = doc if doc is not None and doc.session_context is not None else None
+        self.redraw = Throttle(self.poll, REDRAW_S, doc)
+        self.registry = registry
+        self.who = who
+        self.on_pick = on_pick
+        self.job = None
+        self.seen = 0
+        self.cells: list = []
+        self.cells_source = ColumnDataSource(_columns(cells_frame([])))
+        self.line_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
+        self.marker_source = ColumnDataSource({"cg_pct": [40.0], "gj_nm2": [1500.0]})
+        self._drawn = 0  #: cells in the plot's source
+        self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", label="map-progress",
+                                               bar_color="info")
+        self.status = Text("Map: waiting ...", name="map-status", css_class="amra-map-status")
+        self._lines_key = None
+        self.eta = Eta()
+        self.ea_source = ColumnDataSource({"x": [32.0]})
+
+    # -- subscription
+    def follow(self, spec: MapSpec) -> None:
+        if self.job is not None and self.job.spec == spec and self.job.state not in ("cancelled", "failed", "busy"):
+            return
+        self.release()
+        self.job = self.registry.subscribe(spec, self.who, self.redraw.kick)
+        self.seen = 0
+        self.cells = []
+        self.eta = Eta()
+        self.ea_source.data = {"x": [100.0 * spec.ea]}
+        self._draw(reset=True)
+        self.progress.value = 0
+        if self.job.state == "busy" and self.doc is not None:  # the queue was full: ask again later
+            job = self.job
+            self.doc.add_timeout_callback(lambda: self.job is job and self.follow(job.spec), BUSY_RETRY_MS)
+        self.redraw.kick()
+
+    def release(self) -> None:
+        if self.job is not None:
+            self.registry.unsubscribe(self.job, self.who)
+            self.job = None
+
+    def poll(self) -> None:
+        """Pull new cells and progress from the job and draw them (event loop)."""
+        if self.job is None:
+            return
+        snap = self.job.snapshot(self.seen)
+        if snap["cells"]:
+            self.cells.extend(snap["cells"])
+            self.seen = snap["n"]
+            self._draw()
+        total = max(snap["total"], 1)
+        pct = 100 if snap["state"] == "done" else min(99, int(100 * snap["n"] / total))
+        eta = self.eta.update(snap["n"] - snap["cached"], total - snap["n"], snap["state"] == "running")
+        if self.progress.value != pct:
+            self.progress.value = pct
+        spec = self.job.spec
+        queued = f"queued, position {snap['position']}" if snap.get("position") else "waiting for a free map worker"
+        state = {"queued": queued, "running": "computing", "done": "complete",
+                 "cancelled": "cancelled", "failed": f"failed: {snap['error']}",
+                 "busy": snap["error"]}[snap["state"]]
+        text = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
+                f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}{eta}")
+        if snap.get("notice"):  # the store could not be used or written (app.server.queue.open_store)
+            text += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
+        self.status.object = text  # (a same-text set sends nothing)
+        self.draw_boundaries(self.registry.related(spec))
+
+    def draw_boundaries(self, related: dict) -> None:
+        """The critical-GJ line of every fidelity computed so far (``{fidelity: MapJob}``)."""
+        lines = {}
+        for fid, job in related.items():  # noqa: B007
+            pts = job.critical_line()
+            if len(pts) >= 1:
+                lines[fid] = pts
+        key = repr(lines)
+        if key != self._lines_key:
+            self._lines_key = key
+            for fid, src in self.line_sources.items():
+                pts = lines.get(fid, [])
+                src.data = {"cg_pct": [100.0 * cg for cg, _ in pts], "gj_nm2": [gj for _, gj in pts]}
+
+    def mark(self, cg_pct: float, gj: float) -> None:
+        self.marker_source.data = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]}
+
+    def _draw(self, reset: bool = False) -> None:
+        """Bring the plotted cells up to :attr:`cells`: new ones are streamed (cells only arrive,
+        in order, until :meth:`follow` starts another map, which empties the plot)."""
+        if reset or self._drawn > len(self.cells):
+            self.cells_source.data = _columns(cells_frame(self.cells))
+        elif len(self.cells) > self._drawn:
+            self.cells_source.stream(_columns(cells_frame(self.cells[self._drawn:])))
+        self._drawn = len(self.cells)
+
+    def csv(self) -> io.StringIO:
+        job = self.job
+        return map_csv(self.cells, job.spec if job is not None else None,
+                       complete=job is not None and job.state == "done")
+
+    # -- plot
+    def figure(self):
+        """The map: cells coloured by class (hover: verdict and growth rate), the critical-GJ line
+        of every fidelity computed so far, the current case as a star; a tap loads the nearest cell."""
+        fig = figure(title="Stability boundary map (click a cell to load it)", height=420, sizing_mode="stretch_width",
+                     y_axis_type="log", x_range=Range1d(18, 52), y_range=Range1d(25, 3600),
+                     x_axis_label=CG_LABEL, y_axis_label=GJ_LABEL, tools="pan,wheel_zoom,box_zoom,reset,save",
+                     output_backend="canvas", name="map-plot")
+        # one renderer per class, so the legend keeps one order whatever class a map meets first
+        cells, class_items = [], []
+        for cls, colour in CLASS_COLOURS.items():
+            r = fig.scatter("cg_pct", "gj_nm2", source=self.cells_source, marker="square", size=11, color=colour,
+                            view=CDSView(filter=GroupFilter(column_name="class", group=cls)))
+            cells.append(r)
+            class_items.append(LegendItem(label=cls, renderers=[r]))
+        fig.add_tools(HoverTool(renderers=cells, tooltips=[
+            ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
+            ("verdict", "@verdict"), ("growth rate", "@growth_rate_per_s{0.000} 1/s")]))
+        items = []
+        for fid, (colour, dash) in FIDELITY_STYLE.items():
+            line = fig.line("cg_pct", "gj_nm2", source=self.line_sources[fid], color=colour, line_dash=dash,
+                            line_width=2.5)
+            items.append(LegendItem(label=f"boundary {fid}", renderers=[line]))
+        star = fig.scatter("cg_pct", "gj_nm2", source=self.marker_source, marker="star", size=20, color="gold",
+                           line_color="black")
+        items.append(LegendItem(label="current case", renderers=[star]))
+        ea = fig.vspan(x="x", source=self.ea_source, line_color="black", line_width=1.5, line_dash="dotted")
+        items.append(LegendItem(label="elastic axis (EA)", renderers=[ea]))
+        classes = Legend(items=class_items, location="top_left", title="cells")
+        fig.add_layout(classes, "right")
+        fig.add_layout(Legend(items=items, location="top_left"), "right")
+        fig.toolbar.logo = None
+        fig.on_event(Tap, self._tapped)
+        return fig
+
+    def _tapped(self, event) -> None:
+        cell = nearest_cell(self.cells, event.x, event.y)
+        if cell is not None:
+            self.on_pick(cell)
+
+    def __panel__(self):
+        return pn.Column(self.status, self.progress, pn.pane.Bokeh(self.figure(), sizing_mode="stretch_width"),
+                         sizing_mode="stretch_width")

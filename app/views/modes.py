@@ -1,0 +1,132 @@
+"""Stability at a glance: the trimmed state's modes (table) and the root locus over GJ.
+
+The table lists the eigenvalues (axial) or Floquet exponents (forward) of the current case, from
+``amra_core.stability.analyse``; the root locus plots the modes of :func:`app.compute.walk` along GJ
+for the current CG, coloured by GJ, the current GJ marked, and beside it the largest real part
+against GJ, so the flutter crossing (real part through zero) or the fold (the trim branch ends)
+is visible before any run.
+"""
+from __future__ import annotations
+
+import io
+import math
+
+import holoviews as hv
+import numpy as np
+import pandas as pd
+import panel as pn
+from holoviews.streams import Pipe, Stream
+
+from ..events import Locus, ModeFrames, Modes
+from .rotor import ModeAnimation
+
+MODE_COLUMNS = ["mode", "frequency [Hz]", "damping ratio [-]", "real part [1/s]", "stable"]
+GJ_DIM = hv.Dimension("gj_nm2", label="GJ", unit="N m²/rad")
+RE_DIM = hv.Dimension("re", label="Real part σ", unit="1/s")
+F_DIM = hv.Dimension("f_hz", label="Frequency", unit="Hz")
+LOG_GJ_DIM = hv.Dimension("log_gj", label="log10 GJ", unit="N m²/rad")
+CurrentGJ = Stream.define("CurrentGJ", gj=1500.0)
+
+
+def modes_frame(modes) -> pd.DataFrame:
+    """The mode table (aero-lag modes left out): label, frequency [Hz], damping ratio, real part [1/s]."""
+    rows = [(m.label, round(m.frequency_hz, 3), round(m.damping_ratio, 4), round(m.real_part_per_s, 4),
+             "yes" if m.real_part_per_s < 1e-3 else "NO") for m in modes if m.label != "aero lag"]
+    return pd.DataFrame(rows, columns=MODE_COLUMNS)
+
+
+def locus_frame(points) -> pd.DataFrame:
+    rows = [(p.gj_nm2, math.log10(p.gj_nm2), m.real_part_per_s, m.frequency_hz, m.label)
+            for p in points for m in p.modes]
+    return pd.DataFrame(rows, columns=["gj_nm2", "log_gj", "re", "f_hz", "label"])
+
+
+def critical_frame(points) -> pd.DataFrame:
+    rows = [(p.gj_nm2, p.max_real_part_per_s if p.trimmed else np.nan) for p in sorted(points, key=lambda p: p.gj_nm2)]
+    return pd.DataFrame(rows, columns=["gj_nm2", "re"])
+
+
+class ModesView(pn.viewable.Viewer):
+    def __init__(self, session, **params):
+        super().__init__(**params)
+        self.frame = modes_frame([])
+        self.table = pn.pane.DataFrame(self.frame, index=False, sizing_mode="stretch_width", max_height=320,
+                                       name="mode-table")
+        self.info = pn.pane.Markdown("Modes of the trim: computing ...", name="modes-info")
+        self.locus_info = pn.pane.Markdown("Root locus: computing ...", name="locus-info")
+        self.locus_pipe = Pipe(data=locus_frame([]))
+        self.crit_pipe = Pipe(data=critical_frame([]))
+        self.current = CurrentGJ()
+        self.points = []
+        #: pick a mode to watch its shape; ``on_pick(real_part_per_s, frequency_hz, label)`` computes it
+        self.pick = pn.widgets.Select(label="Watch a mode's shape", options={"(choose a mode)": None},
+                                      sizing_mode="stretch_width", css_classes=["amra-mode-pick"])
+        self.animation = ModeAnimation()
+        self.on_pick = None
+        self.pick.param.watch(self._picked, "value")
+        session.subscribe(ModeFrames, lambda ev: self.animation.load(ev.result))
+        session.subscribe(Modes, lambda ev: self.show_modes(ev.result))
+        session.subscribe(Locus, lambda ev: self.show_locus(ev.result["points"], ev.result["text"]))
+
+    # -- updates (event loop)
+    def show_modes(self, result: dict) -> None:
+        modes = result.get("modes", [])
+        self.frame = modes_frame(modes)
+        self.table.object = self.frame
+        self.info.object = result.get("text", "")
+        options = {"(choose a mode)": None}
+        for m in modes:
+            if m.label != "aero lag":
+                options[f"{m.label}, {m.frequency_hz:.3g} Hz, σ {m.real_part_per_s:+.3g} 1/s"] = (
+                    m.real_part_per_s, m.frequency_hz, m.label)
+        self.pick.options = options
+
+    def _picked(self, event) -> None:
+        if event.new is not None and self.on_pick is not None:
+            self.animation.info.object = "Computing the mode's shape ..."
+            self.on_pick(*event.new)
+
+    def show_locus(self, points, text: str) -> None:
+        self.points = points
+        self.locus_pipe.send(locus_frame(points))
+        self.crit_pipe.send(critical_frame(points))
+        self.locus_info.object = text
+
+    def set_gj(self, gj: float) -> None:
+        self.current.event(gj=float(gj))
+
+    def csv(self) -> io.StringIO:
+        return io.StringIO(self.frame.to_csv(index=False))
+
+    # -- plots
+    def _locus(self, data, gj):
+        pts = hv.Points(data, [RE_DIM, F_DIM], [LOG_GJ_DIM, "label", GJ_DIM]).opts(
+            color="log_gj", cmap="viridis", colorbar=True, size=7, tools=["hover"],
+            clabel="log10 GJ [N m²/rad]")
+        near = data.iloc[0:0]
+        if len(data):
+            g = data["gj_nm2"].unique()
+            near = data[data["gj_nm2"] == g[np.argmin(np.abs(np.log(g) - math.log(gj)))]]
+        cur = hv.Points(near, [RE_DIM, F_DIM], ["label"], label="nearest sampled GJ").opts(
+            marker="circle", size=13, fill_alpha=0, line_color="red", line_width=2)
+        return (pts * cur * hv.VLine(0.0).opts(color="black", line_dash="dashed")).opts(
+            title="Root locus over GJ (current CG)", responsive=True, height=300, show_grid=True,
+            legend_position="top_left")
+
+    def _critical(self, data, gj):
+        curve = hv.Curve(data, [GJ_DIM], [RE_DIM], label="largest real part").opts(logx=True)
+        dots = hv.Scatter(data, [GJ_DIM], [RE_DIM]).opts(size=6, logx=True)
+        return (curve * dots * hv.HLine(0.0).opts(color="black", line_dash="dashed")
+                * hv.VLine(gj).opts(color="red")).opts(
+            title="Least-damped mode vs GJ (gaps: no trim)", responsive=True, height=300, show_grid=True,
+            logx=True, legend_position="top_left")
+
+    def __panel__(self):
+        locus = hv.DynamicMap(lambda data, gj: self._locus(data, gj), streams=[self.locus_pipe, self.current])
+        crit = hv.DynamicMap(lambda data, gj: self._critical(data, gj), streams=[self.crit_pipe, self.current])
+        return pn.Column(
+            pn.Row(pn.Column(self.info, self.table, sizing_mode="stretch_width"),
+                   pn.pane.HoloViews(crit, sizing_mode="stretch_width"), sizing_mode="stretch_width"),
+            pn.Card(self.pick, self.animation, title="Watch a mode", sizing_mode="stretch_width"),
+            self.locus_info, pn.pane.HoloViews(locus, sizing_mode="stretch_width"),
+            sizing_mode="stretch_width")

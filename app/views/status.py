@@ -1,0 +1,143 @@
+"""What the run is doing: the verdict card (class of the run with growth rate, frequency and
+collapse time), the run status line with its clock, and the note on live changes.
+
+The texts are plain Bokeh ``Div``s whose ``text`` alone changes (:class:`Text`): the cheapest
+update a page can get, sent as one property change. They are changed only in the session's
+deliveries (event loop, document locked); the clock at most :data:`CLOCK_PERIOD_S` apart.
+"""
+from __future__ import annotations
+
+import html
+
+import panel as pn
+from bokeh.models import Div
+
+from ..events import Applied, Rows, RunStatus, Started, VerdictNews
+from ..throttle import Throttle
+
+CLOCK_PERIOD_S = 1.0  #: shortest interval between updates of the run clock [s]
+
+COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "divergence": "#ef6c00", "overspeed": "#6a1b9a",
+           "no-autorotation": "#5d4037", "numerical-failure": "#424242"}
+
+
+def _fmt(x, unit, digits=3):
+    return "—" if x is None else f"{x:.{digits}g} {unit}"
+
+
+def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", case: str = "") -> str:
+    """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet) of the run
+    of ``case`` (a one-line description)."""
+    if verdict is None:
+        return ("<div class='amra-verdict' data-verdict='none' style='padding:8px;border-radius:6px;"
+                "background:#eceff1'><b>Verdict:</b> no run yet. Press <i>Run</i>.</div>")
+    colour = COLOURS.get(verdict.verdict, "#37474f")
+    state = "final" if final else "so far"
+    rows = [("Growth rate", _fmt(verdict.growth_rate_per_s, "1/s")),
+            ("Frequency", _fmt(verdict.frequency_hz, "Hz")),
+            ("Collapse time (Ω < 50 % of trim)", _fmt(verdict.collapse_time_s, "s")),
+            ("Solver status", html.escape(status or "—"))]
+    table = "".join(f"<tr><td style='padding-right:12px'>{k}</td><td><b>{v}</b></td></tr>" for k, v in rows)
+    note = f"<div style='font-size:85%;margin-top:4px'>{html.escape(start_note)}</div>" if start_note else ""
+    return (f"<div class='amra-verdict' data-verdict='{html.escape(verdict.verdict)}' data-final='{str(final).lower()}' "
+            f"style='padding:8px;border-radius:6px;border-left:8px solid {colour};background:#fafafa'>"
+            f"<div style='font-size:130%;color:{colour}'><b>{html.escape(verdict.verdict)}</b> "
+            f"<span style='font-size:70%;color:#555'>({state})</span></div>"
+            f"<div class='amra-verdict-case' style='font-size:85%;color:#555'>{html.escape(case)}</div>"
+            f"<div>{html.escape(verdict.explanation)}</div><table>{table}</table>{note}</div>")
+
+
+class Text(pn.viewable.Viewer):
+    """An HTML snippet in a Bokeh ``Div``; ``object`` reads and sets it (a same-text set sends nothing)."""
+
+    def __init__(self, html: str = "", name: str = "", css_class: str = "", **params):
+        super().__init__(**params)
+        self.div = Div(text=html, sizing_mode="stretch_width", name=name or None,
+                       css_classes=[css_class] if css_class else [])
+
+    @property
+    def object(self) -> str:
+        return self.div.text
+
+    @object.setter
+    def object(self, html_text: str) -> None:
+        if html_text != self.div.text:
+            self.div.text = html_text
+
+    def __panel__(self):
+        return pn.pane.Bokeh(self.div, sizing_mode="stretch_width")
+
+
+def badge_html(verdict, final: bool) -> str:
+    """The verdict in one line, for the header in presentation mode (on its dark background)."""
+    if verdict is None:
+        return "<span style='color:#eceff1;font-size:20px'>no run yet</span>"
+    colour = {"stable": "#a5d6a7"}.get(verdict.verdict, "#ffab91")
+    collapse = f" · Ω collapsed at {verdict.collapse_time_s:.1f} s" if verdict.collapse_time_s is not None else ""
+    return (f"<span style='color:{colour};font-size:22px;font-weight:bold'>{html.escape(verdict.verdict)}</span>"
+            f"<span style='color:#eceff1;font-size:16px'> ({'final' if final else 'so far'}){collapse}</span>")
+
+
+def run_html(text: str) -> str:
+    return f"<b>Run:</b> {html.escape(text)}"
+
+
+class StatusView(pn.viewable.Viewer):
+    """Verdict card, run status and live-change note of one session."""
+
+    def __init__(self, session, notify, doc=None, **params):
+        super().__init__(**params)
+        self.card = Text(verdict_html(None, False), name="verdict")
+        self.badge = Text(badge_html(None, False), name="verdict-badge", css_class="amra-badge")
+        self.run = Text(run_html("idle"), name="run-status", css_class="amra-run-status")
+        self.note = Text("", name="live-note", css_class="amra-live-note")
+        self.verdict = None
+        self.notify = notify
+        self._t_s = 0.0
+        self._running = False
+        self.clock = Throttle(self._tick, CLOCK_PERIOD_S, doc)
+        session.subscribe(RunStatus, self._status)
+        session.subscribe(Rows, self._rows)
+        session.subscribe(Started, self._started)
+        session.subscribe(VerdictNews, lambda ev: self.show(ev.verdict, ev.final, ev.status, ev.start_note))
+        self.case = ""  #: the case of the run the card speaks of (set when a run starts)
+        session.subscribe(Applied, self._applied)
+
+    def _status(self, ev: RunStatus) -> None:
+        self._running = ev.state == "running"
+        self.run.object = run_html(ev.text)
+
+    def _tick(self) -> None:
+        if self._running:
+            self.run.object = run_html(f"running, t = {self._t_s:.2f} s")
+
+    def _rows(self, ev: Rows) -> None:
+        self._t_s = ev.t_s
+        self.clock.kick()
+
+    def _started(self, ev: Started) -> None:
+        self.show(None, False)
+        if ev.start_note.startswith("no steady"):
+            self.notify(f"no trim exists for this case: {ev.start_note}", "warning")
+
+    def _applied(self, ev: Applied) -> None:
+        v = ev.values
+        parts = [f"GJ {v['gj_nm2']:.4g} N m²/rad"] if v.get("gj_nm2") is not None else []
+        parts += [f"{n} {100 * v[k]:.3g} %" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if v.get(k) is not None]
+        how = "softened as scripted" if v.get("scripted") else "applied live"
+        self.note.object = f"{how} at t = {ev.t_s:.2f} s: {', '.join(parts)}"
+
+    def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
+        self.verdict = verdict
+        self.card.object = verdict_html(verdict, final, status, start_note, self.case)
+        self.badge.object = badge_html(verdict, final)
+        if final and status == "numerical-failure":
+            self.notify(f"the run failed numerically: {verdict.explanation}")
+
+    def reset(self) -> None:
+        self.show(None, False)
+        self.run.object = run_html("idle")
+        self.note.object = ""
+
+    def __panel__(self):
+        return pn.Column(self.card, self.run, self.note, width=380)

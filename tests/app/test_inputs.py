@@ -1,0 +1,64 @@
+"""Every bad value gets a visible message next to its control, naming the allowed range, and the
+session keeps working (issue 23 §5); tooltips state unit and range."""
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from app.controls import Controls
+from app.inputs import checked_input, tooltip
+
+
+@pytest.mark.parametrize("name, bad, fragment", [
+    ("gj_nm2", 0.0, "GJ [N m²/rad] = 0 is out of range: allowed 10 to 10000"),
+    ("gj_nm2", 1e9, "GJ [N m²/rad] = 1e+09 is out of range: allowed 10 to 10000"),
+    ("gj_nm2", None, "GJ [N m²/rad]: None is not a number; allowed 10 to 10000"),
+    ("gj_nm2", math.nan, "is not a finite number"),
+    ("run_s", -5.0, "Run length [s] = -5 is out of range: allowed 0.5 to 120"),
+    ("run_s", 1000.0, "Run length [s] = 1000 is out of range"),
+    ("speed", 0.0, "Playback [sim s per s] = 0 is out of range: allowed 0.1 to 50"),
+])
+def test_a_bad_value_is_named_and_the_control_keeps_its_value(name, bad, fragment):
+    c = Controls()
+    before = getattr(c, name)
+    box = checked_input(c, name)
+    widget, message = box.objects
+    widget.value = bad
+    assert getattr(c, name) == before
+    assert message.visible and fragment.replace("<", "&lt;") in message.object
+    good = {"gj_nm2": 250.0, "run_s": 4.0, "speed": 2.0}[name]
+    widget.value = good  # the next good value applies and clears the message
+    assert getattr(c, name) == good and not message.visible
+
+
+def test_a_value_set_elsewhere_shows_in_the_input_without_a_message():
+    c = Controls()
+    widget, message = checked_input(c, "gj_nm2").objects
+    widget.value = 0.0
+    c.gj_nm2 = 400.0  # e.g. the log slider or a map click
+    assert widget.value == 400.0 and not message.visible and c.gj_nm2 == 400.0
+
+
+def test_the_soften_time_must_lie_inside_the_run():
+    c = Controls(preset="fig10")
+    c.soften_at_s = 30.0
+    with pytest.raises(ValueError, match="soften at = 30 s is not allowed: must be shorter than the run length"):
+        c.scenario()
+
+
+@pytest.mark.parametrize("name", ["gj_nm2", "ea_pct", "cg_pct", "mu", "run_s", "speed", "soften_at_s"])
+def test_tooltips_state_unit_and_range(name):
+    text = tooltip(Controls.param[name])
+    assert "[" in text and "Allowed:" in text
+
+
+def test_help_explains_every_verdict_and_links_the_sources():
+    from amra_core.verdict import VERDICTS
+    from app.views.help import PAPER_URL, REPORT_URL, help_markdown
+    text = help_markdown(Controls())
+    for v in VERDICTS:
+        assert f"**{v}" in text or f"/ {v}**" in text, v
+    assert "Why a growth rate can be negative" in text
+    assert PAPER_URL in text and REPORT_URL in text
+    assert "GJ [N m²/rad]" in text and "Allowed: 10 to 10000" in text

@@ -1,0 +1,51 @@
+"""The comparison views show their data (issue 23 §7): the ladder's and the previous-vs-last plots
+take their axis ranges from the runs sent (they kept the empty plot's 0-1), carry a legend entry
+per run, and the verdict table prints numbers to 3 significant digits and no 'None'."""
+from __future__ import annotations
+
+import holoviews as hv
+import numpy as np
+import pandas as pd
+
+from app.live import columns_from_rows
+from app.session import Session
+from app.views.ladder import COMPARED, LadderView, verdict_table
+
+
+def _runs():
+    t = np.linspace(0, 5, 200)
+    return {"rigid": {"t": t, "omega": 34 + 0.5 * np.sin(t), "teeter_deg": 0.3 * np.sin(9 * t),
+                      "twist_deg": 2 + 0.1 * np.sin(30 * t)},
+            "fem-coupled": {"t": t, "omega": 33 - 3 * t, "teeter_deg": 0.2 * np.sin(9 * t),
+                            "twist_deg": 3 + 0.2 * np.sin(30 * t)}}
+
+
+def test_ladder_plots_range_over_their_data():
+    hv.extension("bokeh")
+    view = LadderView(Session())
+    dmap = hv.DynamicMap(lambda data: view._plot(data, "omega", hv.Dimension("omega_rad_s"), "t"),
+                         streams=[view.pipe])
+    plot = hv.renderer("bokeh").get_plot(dmap)
+    view.show({"runs": _runs(), "verdicts": [("rigid", "stable", -0.123456789, None, None, "")]})
+    yr = plot.state.y_range
+    assert yr.start <= 18.0 and yr.end >= 34.5  # fem-coupled falls to 18 rad/s, rigid reaches 34.5
+    legend = [item.label["value"] for item in plot.state.legend[0].items]
+    assert legend == ["rigid", "fem-torsion", "fem-coupled"]
+
+
+def test_previous_vs_last_overlay_ranges_over_the_runs():
+    hv.extension("bokeh")
+    view = LadderView(Session())
+    dmap = hv.DynamicMap(lambda data: view._plot(data, "omega", hv.Dimension("omega_rad_s"), "t", COMPARED),
+                         streams=[view.compare_pipe])
+    plot = hv.renderer("bokeh").get_plot(dmap)
+    rows = np.zeros((50, 16))
+    rows[:, 0], rows[:, 2] = np.linspace(0, 1, 50), 33.9
+    frame = pd.DataFrame(columns_from_rows(rows, 1500.0))
+    view.compare(frame, frame.assign(omega_rad_s=frame["omega_rad_s"] - 10))
+    assert plot.state.y_range.start <= 23.9 and plot.state.y_range.end >= 33.9
+
+
+def test_verdict_table_precision():
+    table = verdict_table([("rigid", "stable", -0.123456789, 12.3456, None, "decays")])
+    assert table.iloc[0].tolist() == ["rigid", "stable", "-0.123", "12.3", "—", "decays"]

@@ -1,0 +1,65 @@
+"""The live plots hold a min/max-preserving decimation of the run (at most MAX_POINTS per curve), stream
+only new points, and show a zoomed range at full resolution."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from amra_core.simulation import HISTORY_COLUMNS
+from app.live import MAX_POINTS, PLOTS, LivePlots, columns_from_rows
+
+
+def _chunk(t0: float, n: int, gj: float = 1500.0, dt: float = 0.0025):
+    rows = np.zeros((n, len(HISTORY_COLUMNS)))
+    t = t0 + dt * np.arange(n)
+    rows[:, HISTORY_COLUMNS.index("t_s")] = t
+    rows[:, HISTORY_COLUMNS.index("teeter_rad")] = np.sin(2 * np.pi * 7.0 * t) * (1 + t)  # growing 7 Hz
+    rows[:, HISTORY_COLUMNS.index("omega_rad_s")] = 40 + t
+    return columns_from_rows(rows, gj)
+
+
+def _run(live, seconds: float, chunk_rows: int = 24):
+    n = int(round(seconds / 0.0025))
+    for k in range(0, n, chunk_rows):
+        live.append(_chunk(k * 0.0025, min(chunk_rows, n - k)))
+
+
+def test_a_short_run_is_shown_at_full_resolution_and_streamed():
+    from bokeh.document import Document
+    live = LivePlots()
+    doc = Document()
+    doc.add_root(live.sources[0])
+    kinds = []
+    doc.on_change(lambda event: kinds.append(type(event).__name__))
+    _run(live, 2.0, chunk_rows=25)  # 800 rows, in chunks of an odd number of rows
+    assert all(len(live.shown(i)["t_s"]) == 800 for i in range(len(PLOTS)))
+    assert set(kinds) == {"ColumnsStreamedEvent"} and len(kinds) == 32  # one stream per chunk, no replacement
+
+
+def test_a_40_s_run_holds_at_most_max_points_per_curve_and_keeps_the_peaks():
+    live = LivePlots()
+    _run(live, 40.0)  # 16 000 rows at 1x playback
+    whole = live.frame()
+    assert len(whole) == 16_000
+    for i, (curves, _, _) in enumerate(PLOTS):
+        shown = live.shown(i)
+        assert len(shown["t_s"]) <= MAX_POINTS, curves
+        assert np.all(np.diff(shown["t_s"]) > 0)
+    teeter = live.shown(1)["teeter_deg"]
+    # min/max-preserving: the extremes of the growing oscillation are in the page
+    assert teeter.max() == pytest.approx(whole["teeter_deg"].max()) and teeter.min() == pytest.approx(
+        whole["teeter_deg"].min())
+
+
+def test_zooming_shows_the_range_at_full_resolution_and_reset_returns():
+    live = LivePlots()
+    _run(live, 40.0)
+    live.show_range(10.0, 12.0)
+    shown = live.shown(1)["t_s"]
+    inside = shown[(shown >= 10.0) & (shown <= 12.0)]
+    assert len(inside) == 801 and len(shown) <= MAX_POINTS  # every row of the 2 s (400 rows/s)
+    live.append(_chunk(40.0, 24))  # while zoomed, the view stays
+    assert live.shown(1)["t_s"].max() < 13.0
+    live.reset()
+    assert live.shown(1)["t_s"].max() == pytest.approx(40.0 + 23 * 0.0025)
+    assert len(live.shown(1)["t_s"]) <= MAX_POINTS

@@ -1,0 +1,97 @@
+"""The session: its run thread streams full-resolution rows, applies live changes without a restart,
+stops and starts without waiting on a thread, and hands typed events to their subscribers."""
+from __future__ import annotations
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from amra_core.simulation import COL
+from app.controls import Controls
+from app.events import Applied, Disc, Finished, Rows, RunStatus, VerdictNews
+from app.session import Session
+
+
+class Recorder:
+    def __init__(self, session):
+        self.events = []
+        for kind in (Rows, Applied, Disc, Finished, RunStatus, VerdictNews):
+            session.subscribe(kind, self.events.append)
+
+    def of(self, kind):
+        return [e for e in self.events if isinstance(e, kind)]
+
+
+def _case(**kw):
+    return Controls(**{"run_s": 2.0, **kw}).case()
+
+
+def run_until(session, pred, wait, timeout_s=60, what="condition"):
+    def step():
+        session.delivery.run_due()
+        return pred()
+    wait(step, timeout_s, what=what)
+
+
+def test_a_run_streams_every_row_in_chunks_and_finishes(wait):
+    s = Session()
+    rec = Recorder(s)
+    s.start(_case(run_s=1.0), speed=10.0)
+    run_until(s, lambda: rec.of(Finished), wait, what="the run to finish")
+    t = np.concatenate([e.rows[:, COL["t_s"]] for e in rec.of(Rows)])
+    assert np.all(np.diff(t) > 0) and t[-1] == pytest.approx(1.0, abs=0.01)
+    fin = rec.of(Finished)[0]
+    assert len(t) == len(fin.history)  # full resolution: every recorded row reaches the views
+    assert fin.status == "completed" and not fin.stopped
+    finals = [v for v in rec.of(VerdictNews) if v.final]
+    assert finals and finals[0].verdict.verdict == "stable"
+    assert rec.of(Disc)[-1].data["r_m"]
+    assert not s.running
+
+
+def test_stop_and_start_never_wait_for_the_run_thread(wait):
+    s = Session()
+    rec = Recorder(s)
+    s.start(_case(run_s=30.0), speed=1.0)
+    run_until(s, lambda: rec.of(Rows), wait, what="the first rows")
+    t0 = time.perf_counter()
+    s.stop()
+    second = s.start(_case(run_s=0.5), speed=10.0)
+    assert time.perf_counter() - t0 < 0.05  # signals only
+    run_until(s, lambda: [f for f in rec.of(Finished) if f.run_id == second], wait, what="the second run")
+    assert {f.run_id for f in rec.of(Finished)} == {second}  # the first run's late news was dropped
+    wait(lambda: sum(t.name.startswith("amra-run") for t in threading.enumerate()) == 0, 30, what="threads")
+
+
+def test_a_live_change_continues_the_run_with_the_new_gj(wait):
+    s = Session()
+    rec = Recorder(s)
+    s.start(_case(run_s=4.0), speed=4.0)
+    run_until(s, lambda: rec.of(Rows) and rec.of(Rows)[-1].t_s > 0.5, wait, what="0.5 s of run")
+    s.set_live(gj_nm2=700.0, x_ea=0.32, x_cg=0.40)
+    run_until(s, lambda: any(e.gj_nm2 == 700.0 for e in rec.of(Rows)), wait, what="rows with the new GJ")
+    assert rec.of(Applied)[0].values["gj_nm2"] == 700.0
+    t = np.concatenate([e.rows[:, COL["t_s"]] for e in rec.of(Rows)])
+    assert np.all(np.diff(t) > 0)  # one run, continuing
+    assert len(s.live_latencies_s) == 1 and 0 < s.live_latencies_s[0] < 30
+    s.stop()
+
+
+def test_a_run_that_fails_to_start_says_why(wait):
+    from app.events import Notice
+    s = Session()
+    notes = []
+    s.subscribe(Notice, notes.append)
+    s.start("not a case")  # type: ignore[arg-type]
+    run_until(s, lambda: notes, wait, what="the message")
+    assert "could not start" in notes[0].text
+
+
+def test_the_trim_runs_in_the_run_pool(wait, analysis_pool):
+    s = Session(run_pool=analysis_pool)
+    rec = Recorder(s)
+    s.start(_case(run_s=0.5), speed=10.0)
+    run_until(s, lambda: rec.of(Finished), wait, 120, what="the run")
+    assert rec.of(Finished)[0].status == "completed" and s.sim is not None

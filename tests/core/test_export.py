@@ -1,0 +1,29 @@
+"""Exports that stand alone (amra_core.export): names that say the case, header lines with the
+parameters and version, numbers to 8 significant digits, blanks for non-finite values."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+
+from amra_core import __version__
+from amra_core.export import file_name, table_csv
+
+
+def test_file_names_say_the_case():
+    assert file_name("history", case="fig10", fidelity="rigid", gj_nm2=100.0, cg_pct=40.0) == \
+        "amra-fig10-rigid-gj100-cg40-history.csv"
+    assert file_name("map", fidelity="fem-coupled", mu=0.1) == "amra-map-fem-coupled-mu0.1.csv"
+    assert file_name("modes", case="My rotor/../x", gj_nm2=487.58387005217355) == "amra-myrotor..x-gj487.6-modes.csv"
+
+
+def test_table_csv_round_trips_with_its_header():
+    rows = np.array([[0.0, 37.387451975177356, 1e-12], [0.0025, float("nan"), -3.0]])
+    text = table_csv(("t_s", "omega_rad_s", "teeter_rad"), rows, {"fidelity": "rigid", "gj_nm2": 100.0})
+    lines = text.splitlines()
+    assert lines[:3] == [f"# AMRA {__version__}", "# fidelity: rigid", "# gj_nm2: 100"]
+    assert lines[3] == "t_s,omega_rad_s,teeter_rad"
+    assert lines[4] == "0,37.387452,1e-12" and lines[5] == "0.0025,,-3"
+    back = np.genfromtxt(io.StringIO(text), delimiter=",", comments="#", skip_header=4)
+    np.testing.assert_allclose(back[0], [0.0, 37.387452, 1e-12])
+    assert np.isnan(back[1, 1])
