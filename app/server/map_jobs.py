@@ -16,7 +16,7 @@ from collections import OrderedDict
 from dataclasses import replace
 from typing import Optional
 
-from amra_core.boundary import MapSpec, cell_class, iter_map, solver_fingerprint
+from amra_core.boundary import MapSpec, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
 
 from .queue import Busy, FairSlots, lower_priority_of_this_thread, open_store
@@ -42,6 +42,8 @@ class MapJob:
         self.cancel = threading.Event()
         self.subscribers: dict = {}  #: who -> callback(), called from the map's thread on every change
         self.started_at = time.time()
+        self._columns: list = []  #: the finished columns' summaries (amra_core.boundary.BoundaryMap.columns)
+        self._n_columns = 0
         self._thread = threading.Thread(target=self._run, name="amra-map", daemon=True)
 
     def start(self) -> None:
@@ -68,10 +70,14 @@ class MapJob:
                 run = iter_map(self.spec, executor=ex, store=reg.store, cancel=self.cancel)
                 for cell in run:
                     self.store_error = getattr(run, "store_error", "")
+                    columns = run.result().columns if len(run.info) != self._n_columns else None
                     with self._lock:
                         self.cells.append(cell)
                         self.cached = run.cached
                         self.estimated_total = max(run.estimated_total, len(self.cells))
+                        if columns is not None:  # a column finished: its fold and flutter GJ are known
+                            self._columns, self._n_columns = [c for c in columns if c["status"] != "incomplete"], \
+                                len(run.info)
                     self._changed()
                 self.state = "cancelled" if run.cancelled else "done"
             except Exception as exc:  # noqa: BLE001 - shown to every subscriber
@@ -104,23 +110,11 @@ class MapJob:
         with self._lock:
             return list(self.cells)
 
-    def critical_line(self) -> list:
-        """Per CG column, the lowest computed GJ from which the column is stable up to the top of
-        the computed cells (the map's ``critical_gj`` definition): ``[(cg, gj), ...]``."""
-        by_col: dict = {}
-        for c in self.all_cells():
-            by_col.setdefault(c.cg, []).append(c)
-        out = []
-        for cg in sorted(by_col):
-            cells = sorted(by_col[cg], key=lambda c: c.gj_nm2)
-            if cell_class(cells[-1]) != "stable":
-                continue
-            i = len(cells) - 1
-            while i > 0 and cell_class(cells[i - 1]) == "stable":
-                i -= 1
-            if i > 0:
-                out.append((cg, cells[i].gj_nm2))
-        return out
+    def columns(self) -> list:
+        """The finished columns: ``fold_gj``, ``flutter_gj`` (strong flutter only), ``critical_gj`` and
+        the ``intervals`` with their ``strength`` (:mod:`amra_core.boundary.intervals`)."""
+        with self._lock:
+            return list(self._columns)
 
 
 class MapRegistry:

@@ -91,6 +91,33 @@ class Eta:
         return f", about {left:.0f} s left" if left < 120 else f", about {left / 60:.0f} min left"
 
 
+def boundary_lines(columns) -> tuple:
+    """``(fold, flutter)``: ``[(cg, gj), ...]`` of the columns' fold GJ and strong-flutter GJ [N m²/rad]."""
+    fold = [(c["cg"], c["fold_gj"]) for c in columns if c.get("fold_gj") is not None]
+    flutter = [(c["cg"], c["flutter_gj"]) for c in columns if c.get("flutter_gj") is not None]
+    return fold, flutter
+
+
+def flutter_bands(columns, width_pct: float) -> list:
+    """The flutter intervals of the columns as bands ``left``/``right`` [% chord], ``bottom``/``top``
+    [N m²/rad], with their ``strength`` and a hover ``text``."""
+    out = []
+    for c in columns:
+        for iv in c.get("intervals", []):
+            if iv.get("kind") != "flutter" or iv.get("fold_approach"):
+                continue
+            lo, hi = iv.get("gj_lo_nm2"), iv.get("gj_hi_nm2")
+            if lo is None or hi is None or not hi > lo:
+                continue
+            zeta, growth = iv.get("damping_ratio"), iv.get("peak_growth_rate_1_s")
+            text = (f"{iv.get('strength', '')} flutter, GJ {lo:.4g}-{hi:.4g} N m²/rad, "
+                    + (f"damping ratio {zeta:+.3f}, " if zeta is not None else "")
+                    + (f"growth {growth:+.3g} 1/s" if growth is not None else ""))
+            out.append({"left": 100 * c["cg"] - 0.35 * width_pct, "right": 100 * c["cg"] + 0.35 * width_pct,
+                        "bottom": lo, "top": hi, "strength": iv.get("strength", "strong"), "text": text})
+    return out
+
+
 def map_csv(cells, spec=None, complete: bool = True) -> io.StringIO:
     """The map's cells, CG in % chord as on the page, numbers to 8 digits; the map's case and
     whether it is complete in ``#`` lines above (a half-finished map says so)."""
@@ -117,7 +144,10 @@ class MapView(pn.viewable.Viewer):
         self.seen = 0
         self.cells: list = []
         self.cells_source = ColumnDataSource(_columns(cells_frame([])))
-        self.line_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
+        self.fold_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
+        self.flutter_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
+        self.band_sources = {k: ColumnDataSource({"left": [], "right": [], "bottom": [], "top": [], "text": []})
+                             for k in ("strong", "weak")}
         self.marker_source = ColumnDataSource({"cg_pct": [40.0], "gj_nm2": [1500.0]})
         self._drawn = 0  #: cells in the plot's source
         self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", label="map-progress",
@@ -176,18 +206,26 @@ class MapView(pn.viewable.Viewer):
         self.draw_boundaries(self.registry.related(spec))
 
     def draw_boundaries(self, related: dict) -> None:
-        """The critical-GJ line of every fidelity computed so far (``{fidelity: MapJob}``)."""
-        lines = {}
-        for fid, job in related.items():  # noqa: B007
-            pts = job.critical_line()
-            if len(pts) >= 1:
-                lines[fid] = pts
-        key = repr(lines)
-        if key != self._lines_key:
-            self._lines_key = key
-            for fid, src in self.line_sources.items():
-                pts = lines.get(fid, [])
+        """Per fidelity computed so far (``{fidelity: MapJob}``): the fold line (no autorotation below)
+        and the strong-flutter line; for the map shown, its flutter intervals as shaded bands, the
+        weak windows lighter and hatched (shown, but they do not move the critical GJ)."""
+        lines = {fid: boundary_lines(job.columns()) for fid, job in related.items()}
+        bands = flutter_bands(self.job.columns() if self.job is not None else [], self.column_width_pct())
+        key = repr((lines, bands))
+        if key == self._lines_key:
+            return
+        self._lines_key = key
+        for fid in FIDELITY_STYLE:
+            fold, flutter = lines.get(fid, ([], []))
+            for src, pts in ((self.fold_sources[fid], fold), (self.flutter_sources[fid], flutter)):
                 src.data = {"cg_pct": [100.0 * cg for cg, _ in pts], "gj_nm2": [gj for _, gj in pts]}
+        for strength, src in self.band_sources.items():
+            rows = [b for b in bands if b["strength"] == strength]
+            src.data = {k: [b[k] for b in rows] for k in ("left", "right", "bottom", "top", "text")}
+
+    def column_width_pct(self) -> float:
+        cgs = sorted(self.job.spec.cg_values) if self.job is not None else []
+        return 100.0 * min((b - a for a, b in zip(cgs, cgs[1:])), default=0.05)
 
     def mark(self, cg_pct: float, gj: float) -> None:
         self.marker_source.data = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]}
@@ -210,7 +248,8 @@ class MapView(pn.viewable.Viewer):
     def figure(self):
         """The map: cells coloured by class (hover: verdict and growth rate), the critical-GJ line
         of every fidelity computed so far, the current case as a star; a tap loads the nearest cell."""
-        fig = figure(title="Stability boundary map (click a cell to load it)", height=420, sizing_mode="stretch_width",
+        fig = figure(title="Stability boundary map: critical GJ vs CG, as the paper's Fig. 14 (click a cell to load it)",
+                     height=460, sizing_mode="stretch_width",
                      y_axis_type="log", x_range=Range1d(18, 52), y_range=Range1d(25, 3600),
                      x_axis_label=CG_LABEL, y_axis_label=GJ_LABEL, tools="pan,wheel_zoom,box_zoom,reset,save",
                      output_backend="canvas", name="map-plot")
@@ -225,10 +264,22 @@ class MapView(pn.viewable.Viewer):
             ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
             ("verdict", "@verdict"), ("growth rate", "@growth_rate_per_s{0.000} 1/s")]))
         items = []
-        for fid, (colour, dash) in FIDELITY_STYLE.items():
-            line = fig.line("cg_pct", "gj_nm2", source=self.line_sources[fid], color=colour, line_dash=dash,
-                            line_width=2.5)
-            items.append(LegendItem(label=f"boundary {fid}", renderers=[line]))
+        strong = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.band_sources["strong"],
+                          fill_color="#c62828", fill_alpha=0.35, line_color="#c62828")
+        weak = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.band_sources["weak"],
+                        fill_color="#ef9a9a", fill_alpha=0.15, line_color="#ef9a9a", line_dash="dotted",
+                        hatch_pattern="/", hatch_color="#e57373", hatch_alpha=0.5)
+        items += [LegendItem(label="strong flutter (this map)", renderers=[strong]),
+                  LegendItem(label="weak window (does not set GJ)", renderers=[weak])]
+        fig.add_tools(HoverTool(renderers=[strong, weak], tooltips=[("", "@text")]))
+        for fid, (colour, _) in FIDELITY_STYLE.items():
+            fold = fig.line("cg_pct", "gj_nm2", source=self.fold_sources[fid], color=colour, line_width=3)
+            fig.scatter("cg_pct", "gj_nm2", source=self.fold_sources[fid], color=colour, size=6)
+            flutter = fig.line("cg_pct", "gj_nm2", source=self.flutter_sources[fid], color=colour, line_width=2.5,
+                               line_dash="dashed")
+            fig.scatter("cg_pct", "gj_nm2", source=self.flutter_sources[fid], color=colour, marker="triangle", size=8)
+            items += [LegendItem(label=f"{fid}: fold", renderers=[fold]),
+                      LegendItem(label=f"{fid}: strong flutter", renderers=[flutter])]
         star = fig.scatter("cg_pct", "gj_nm2", source=self.marker_source, marker="star", size=20, color="gold",
                            line_color="black")
         items.append(LegendItem(label="current case", renderers=[star]))

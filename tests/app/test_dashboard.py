@@ -138,8 +138,9 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     from app.views.map import CLASS_COLOURS
     legends = [[item.label["value"] for item in lg.items] for lg in fig.right]
     assert legends[0] == list(CLASS_COLOURS)  # the same order whatever class a map meets first
-    assert "elastic axis (EA)" in legends[1] and legends[1][:3] == ["boundary rigid", "boundary fem-torsion",
-                                                                     "boundary fem-coupled"]
+    assert "elastic axis (EA)" in legends[1] and legends[1][:4] == ["strong flutter (this map)",
+                                                                     "weak window (does not set GJ)",
+                                                                     "rigid: fold", "rigid: strong flutter"]
     dash.refresh_analyses()
     assert 0.40 in dash.map.job.spec.cg_values  # the paper's CG is always a column
     assert dash.map.ea_source.data["x"] == [32.0]  # the EA drawn where it is
@@ -247,3 +248,23 @@ def test_the_map_time_estimate_follows_the_rate_of_computed_cells():
     now[0] += 90.0
     assert eta.update(5, 45, True) == ", about 15 min left"  # 5 cells in 100 s: 900 s
     assert eta.update(50, 0, True) == "" and eta.update(5, 45, False) == ""
+
+
+def test_map_boundaries_and_bands_from_the_columns():
+    """Fold and strong-flutter lines per column, flutter intervals as bands, weak ones apart (issue 21)."""
+    from app.views.map import boundary_lines, flutter_bands
+    cols = [{"cg": 0.36, "fold_gj": 270.0, "flutter_gj": None, "intervals": [
+                {"kind": "fold", "gj_lo_nm2": 30.0, "gj_hi_nm2": 270.0},
+                {"kind": "flutter", "gj_lo_nm2": 270.0, "gj_hi_nm2": 281.0, "fold_approach": True,
+                 "strength": "weak"}]},
+            {"cg": 0.40, "fold_gj": 416.0, "flutter_gj": None, "intervals": [
+                {"kind": "flutter", "gj_lo_nm2": 628.0, "gj_hi_nm2": 662.0, "strength": "weak",
+                 "damping_ratio": -0.01, "peak_growth_rate_1_s": 0.97}]},
+            {"cg": 0.44, "fold_gj": 550.0, "flutter_gj": 700.0, "intervals": [
+                {"kind": "flutter", "gj_lo_nm2": 600.0, "gj_hi_nm2": 700.0, "strength": "strong",
+                 "damping_ratio": -0.05, "peak_growth_rate_1_s": 4.0}]}]
+    fold, flutter = boundary_lines(cols)
+    assert fold == [(0.36, 270.0), (0.40, 416.0), (0.44, 550.0)] and flutter == [(0.44, 700.0)]
+    bands = flutter_bands(cols, 4.0)
+    assert [(b["strength"], b["bottom"], b["top"]) for b in bands] == [("weak", 628.0, 662.0), ("strong", 600.0, 700.0)]
+    assert bands[0]["left"] == pytest.approx(40 - 1.4) and "damping ratio -0.010" in bands[0]["text"]

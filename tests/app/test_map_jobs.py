@@ -66,7 +66,11 @@ def test_only_max_running_jobs_compute_at_once(server_settings, wait):
     wait(lambda: j2.state == "done", 240, what="the second job")
     assert j1.state == "done"
     assert set(reg.related(MapSpec(**SMALL))) == {"rigid"}
-    assert j1.critical_line() and all(100.0 <= gj <= 2000.0 for _, gj in j1.critical_line())
+    cols = j1.columns()  # every finished column with its fold and strong-flutter GJ
+    assert [c["cg"] for c in cols] == list(MapSpec(**SMALL).cg_values)
+    assert all(c["fold_gj"] is None or 100.0 <= c["fold_gj"] <= 2000.0 for c in cols)
+    assert all(c["critical_gj"] == max(g for g in (c["fold_gj"], c["flutter_gj"]) if g is not None)
+               for c in cols if c["critical_gj"] is not None)
     reg.close()
 
 
