@@ -31,14 +31,17 @@ VERDICTS = (
 )
 
 MAP_CLASSES = (
-    ("fold boundary", "Below this GJ no steady autorotation exists (the branch of trims ends)."),
-    ("strong flutter", "An unstable mode on the trim branch whose damping ratio is below minus the weak "
-                       "threshold: it sets the flutter GJ, and with the fold the critical GJ (the larger)."),
-    ("weak flutter window", "A narrow band just unstable (damping ratio about -0.01): real in the linear model, "
-                            "but a kick saturates at a fraction of a degree of twist. Drawn lighter; it does not "
-                            "move the critical GJ."),
-    ("overspeed branch", "The trim continues with a rising rotor speed past twice the hover induced velocity: "
-                         "the normal branch overspeeding, not the windmill-brake root."),
+    ("fold line", "Below this GJ no steady autorotation exists (the branch of trims ends, or continues only as "
+                  "an overspeeding or windmill-brake state)."),
+    ("strong flutter line", "The top of the highest strong flutter interval: above it the column is stable. The "
+                            "critical GJ is the larger of the fold and the strong flutter GJ."),
+    ("strong flutter band", "An unstable mode on the trim branch that is not weak (shaded)."),
+    ("weak window", "A flutter interval whose damping ratio is above -0.02 and whose 20 s run from the default kick "
+                    "keeps the rotor speed and stays within 1° of twist and teeter (amra boundary --weak-damping, "
+                    "--weak-amplitude). Real in the linear model, but marginal: drawn lighter and hatched, exported, "
+                    "and it never moves the critical GJ."),
+    ("overspeed", "The trim continues with a rising rotor speed past twice the hover induced velocity: the normal "
+                  "branch overspeeding, not the windmill-brake root."),
 )
 
 
