@@ -33,7 +33,13 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
                 "background:#eceff1'><b>Verdict:</b> no run yet. Press <i>Run</i>.</div>")
     colour = COLOURS.get(verdict.verdict, "#37474f")
     state = "final" if final else "so far"
-    rows = [("Growth rate", _fmt(verdict.growth_rate_per_s, "1/s")),
+    outcome = getattr(verdict, "outcome", "") or ""
+    cycle = getattr(verdict, "limit_cycle", None) or {}
+    if outcome == "bounded-oscillation" and cycle:
+        outcome += " (" + ", ".join(f"{k.replace('_', ' ')} {v:.3g}" for k, v in cycle.items()
+                                    if isinstance(v, (int, float))) + ")"
+    rows = [("Outcome", html.escape(outcome.replace("-", " ") or "—")),
+            ("Growth rate", _fmt(verdict.growth_rate_per_s, "1/s")),
             ("Frequency", _fmt(verdict.frequency_hz, "Hz")),
             ("Collapse time (Ω < 50 % of trim)", _fmt(verdict.collapse_time_s, "s")),
             ("Solver status", html.escape(status or "—"))]
@@ -44,6 +50,7 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
             f"<div style='font-size:130%;color:{colour}'><b>{html.escape(verdict.verdict)}</b> "
             f"<span style='font-size:70%;color:#555'>({state})</span></div>"
             f"<div class='amra-verdict-case' style='font-size:85%;color:#555'>{html.escape(case)}</div>"
+            f"<div class='amra-rotor-speed'><b>{html.escape(getattr(verdict, 'rotor_speed', '') or '')}</b></div>"
             f"<div>{html.escape(verdict.explanation)}</div><table>{table}</table>{note}</div>")
 
 
