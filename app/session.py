@@ -65,7 +65,8 @@ class Session:
         self.delivery.kick()
 
     def deliver(self) -> None:
-        """Hand the queued events to their subscribers, in order (event loop)."""
+        """Hand the queued events to their subscribers, in order (event loop); consecutive rows
+        computed with the same GJ go as one batch, and only the latest pose is drawn."""
         rows, pose = [], None
         while True:
             try:
@@ -74,16 +75,17 @@ class Session:
                 break
             if getattr(ev, "run_id", self.run_id) != self.run_id:
                 continue  # from a run that was replaced
-            if isinstance(ev, Rows):
+            if isinstance(ev, Rows) and (not rows or rows[-1].gj_nm2 == ev.gj_nm2):
                 rows.append(ev)
                 continue
             if isinstance(ev, Pose):  # only the latest shape is drawn
                 pose = ev
                 continue
             self._dispatch_rows(rows)
-            rows = []
-            for handler in self._handlers[type(ev)]:
-                handler(ev)
+            rows = [ev] if isinstance(ev, Rows) else []
+            if not isinstance(ev, Rows):
+                for handler in self._handlers[type(ev)]:
+                    handler(ev)
         self._dispatch_rows(rows)
         if pose is not None:
             for handler in self._handlers[Pose]:

@@ -1,10 +1,8 @@
 """Every control mirrored in the URL, so a case can be shared as a link and reopens exactly.
 
-:func:`apply_query` validates each query value the way a widget value is validated (param
-bounds and types, finite numbers) and applies the good ones (the preset first, so explicit
-values win); each bad one gives a message naming it. :func:`apply_session_query` does so when the
-session is created; :func:`sync_url` (once the page has loaded) then keeps the URL in step with the
-controls through ``pn.state.location.sync``.
+:func:`apply_query` validates each value as a widget's is (bounds, types, finite numbers), the
+preset first so explicit values win; each bad one gives a message naming it. It runs when the
+session is created; :func:`sync_url` then keeps the URL in step (``pn.state.location.sync``).
 """
 from __future__ import annotations
 

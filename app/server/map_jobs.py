@@ -1,12 +1,10 @@
 """Server-wide boundary-map jobs: one job per MapSpec however many sessions ask, bounded.
 
-A :class:`MapRegistry` is created once per server process (``pn.state.cache`` via
-:func:`get_registry`, also called by the ``--setup`` script) and shared by every session of that
-process. ``subscribe(spec, who)`` returns the running or finished job for ``spec`` (starting it if
-needed); a job nobody subscribes to any more is cancelled (its finished cells are in the SQLite
-store, so a later job for the same spec resumes at once). At most ``max_running`` jobs compute at
-a time; the others wait for a slot. Finished jobs are kept (up to ``max_jobs``) so a repeated
-request is answered from memory; cells of earlier processes come from the store.
+One :class:`MapRegistry` per server process (``pn.state.cache``, :func:`get_registry`).
+``subscribe(spec, who, on_change)`` returns the running or finished job for ``spec`` (starting it
+if needed) and calls ``on_change`` from the job's thread at each change; a job nobody follows is
+cancelled (finished cells are in the SQLite store, so a later job resumes at once). At most
+``max_running`` jobs compute at a time, the others queue; finished jobs are kept (``max_jobs``).
 """
 from __future__ import annotations
 
@@ -20,7 +18,6 @@ from amra_core.boundary import MapSpec, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
 
 from .queue import Busy, FairSlots, lower_priority_of_this_thread, open_store
-
 from .settings import ServerSettings
 
 CACHE_KEY = "amra-map-registry"

@@ -1,15 +1,9 @@
-"""Server-wide process pools: GIL-heavy Python work (trims, eigen-analyses) out of the process
-that serves the pages.
-
-* the **analysis** pool (:func:`get_analysis_pool`): one-shot analyses (modes, locus, fan plot,
-  ladder) at low CPU priority; :class:`LatestTasks` is its per-session front: ``submit(key, event,
-  fn, *args)`` supersedes what this session queued under ``key`` (a pending call is cancelled, a
-  running one's result is dropped) and posts ``event(result)`` through the session's thread-safe
-  ``post``;
-* the **run** pool (:func:`get_run_pool`): the trim that starts a run, at normal priority, so a
-  Run never waits behind another session's analyses.
-
-One of each per server process, in ``pn.state.cache``.
+"""Server-wide process pools (one of each per process, ``pn.state.cache``) that keep GIL-heavy
+Python work (trims, eigen-analyses) out of the process serving the pages: the **analysis** pool
+(modes, locus, fan plot, ladder; low CPU priority) and the **run** pool (the trim that starts a
+run, normal priority: a Run never waits behind analyses). :class:`LatestTasks` is a session's
+front to the analysis pool: ``submit(key, event, fn, *args)`` supersedes what the session queued
+under ``key`` and posts ``event(result)`` through the session's thread-safe ``post``.
 """
 from __future__ import annotations
 

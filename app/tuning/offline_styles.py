@@ -1,23 +1,12 @@
 """Page resources (JS, CSS) from this server, never a CDN: classrooms and team servers are often offline.
 
-Reproducer and upstream report: ``docs/upstream/panel-hidden-tab-stylesheets-cdn.md``. The
-work-around is applied only on :data:`CHECKED` (the versions it was verified on); on any other
-Panel the page may fetch two stylesheets from the CDN, which ``test_every_view_tab_opens_offline``
-reports, so an upgrade re-checks whether the bug is still there.
-
-Setting Bokeh's resource mode to ``server`` covers the page as first rendered. It does not cover
-one path in Panel 1.9.4: a pane updated while its model is outside the document (a Markdown pane in
-a tab that is not shown: Panel's dynamic tabs detach the hidden tab's models but still update them)
-recomputes its stylesheets with ``doc=None``. Panel then has no ``dist_url`` to go by and rewrites
-its stylesheets to the CDN (``panel.io.resources.patch_stylesheet(sheet, CDN_DIST)``). Those
-``ImportedStyleSheet`` objects are shared by every model of the session's document (Panel caches one
-per URL and document), so every view switches to ``cdn.holoviz.org/.../loading.css`` and
-``markdown.css``: measured, 12 outside requests and 3 console errors offline for a first switch to
-the "Modes & root locus" tab while the map's status line updated (``test_every_view_tab_opens_offline``).
-
-:func:`serve_resources_locally` sets the mode and wraps ``patch_stylesheet`` so that, while the
-process serves its resources itself, a request to patch towards the CDN patches towards this
-server's own copy (the same path Panel uses when the document is known) instead. It is idempotent.
+Bokeh's resource mode ``server`` covers the page as first rendered. In Panel 1.9.4 a pane updated
+while detached from its document (a hidden tab of dynamic ``Tabs``) recomputes its stylesheets
+with ``doc=None`` and rewrites the session's shared ``ImportedStyleSheet``s to the CDN. The bug,
+its reproducer and the fix to propose: ``docs/upstream/panel-hidden-tab-stylesheets-cdn.md``.
+:func:`serve_resources_locally` sets the mode and, on the :data:`CHECKED` Panel versions only,
+wraps ``patch_stylesheet`` so that a patch towards the CDN goes to this server's own copy.
+``test_every_view_tab_opens_offline`` shows after an upgrade whether the bug is still there.
 """
 from __future__ import annotations
 

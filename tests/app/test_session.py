@@ -3,7 +3,6 @@ stops and starts without waiting on a thread, and hands typed events to their su
 from __future__ import annotations
 
 import threading
-import time
 
 import numpy as np
 import pytest
@@ -51,18 +50,40 @@ def test_a_run_streams_every_row_in_chunks_and_finishes(wait):
     assert not s.running
 
 
-def test_stop_and_start_never_wait_for_the_run_thread(wait):
-    s = Session()
+class BlockedTrim:
+    """A run pool whose trims wait until released: a run thread stuck in its trim."""
+
+    def __init__(self):
+        self.release = threading.Event()
+
+    def submit(self, fn, *args):
+        from concurrent.futures import Future
+        fut = Future()
+
+        def later():
+            self.release.wait(60)
+            fut.set_result(fn(*args))
+        threading.Thread(target=later, daemon=True).start()
+        return fut
+
+
+def test_stop_start_and_close_never_wait_for_the_run_thread(wait):
+    """With the run thread stuck in its trim, Stop, Run and close return (a join would hang here)."""
+    pool = BlockedTrim()
+    s = Session(run_pool=pool)
     rec = Recorder(s)
-    s.start(_case(run_s=30.0), speed=1.0)
-    run_until(s, lambda: rec.of(Rows), wait, what="the first rows")
-    t0 = time.perf_counter()
+    first = s.start(_case(run_s=30.0), speed=1.0)
+    stuck = s._thread
     s.stop()
     second = s.start(_case(run_s=0.5), speed=10.0)
-    assert time.perf_counter() - t0 < 0.05  # signals only
+    assert stuck.is_alive() and second == first + 1  # returned while the first run still trims
+    pool.release.set()
     run_until(s, lambda: [f for f in rec.of(Finished) if f.run_id == second], wait, what="the second run")
-    assert {f.run_id for f in rec.of(Finished)} == {second}  # the first run's late news was dropped
-    wait(lambda: sum(t.name.startswith("amra-run") for t in threading.enumerate()) == 0, 30, what="threads")
+    assert {f.run_id for f in rec.of(Finished)} == {second}  # the first run's news was dropped
+    third = s.start(_case(run_s=30.0), speed=1.0)
+    s.close()
+    assert third == second + 1
+    wait(lambda: sum(t.name.startswith("amra-run") for t in threading.enumerate()) == 0, 60, what="threads")
 
 
 def test_a_live_change_continues_the_run_with_the_new_gj(wait):
@@ -72,7 +93,10 @@ def test_a_live_change_continues_the_run_with_the_new_gj(wait):
     run_until(s, lambda: rec.of(Rows) and rec.of(Rows)[-1].t_s > 0.5, wait, what="0.5 s of run")
     s.set_live(gj_nm2=700.0, x_ea=0.32, x_cg=0.40)
     run_until(s, lambda: any(e.gj_nm2 == 700.0 for e in rec.of(Rows)), wait, what="rows with the new GJ")
-    assert rec.of(Applied)[0].values["gj_nm2"] == 700.0
+    applied = rec.of(Applied)[0]
+    assert applied.values["gj_nm2"] == 700.0
+    for ev in rec.of(Rows):  # a batch carries the GJ its rows were computed with
+        assert (ev.gj_nm2 == 700.0) == (ev.rows[0, COL["t_s"]] > applied.t_s - 1e-9), (ev.gj_nm2, ev.rows[0, 0])
     t = np.concatenate([e.rows[:, COL["t_s"]] for e in rec.of(Rows)])
     assert np.all(np.diff(t) > 0)  # one run, continuing
     assert len(s.live_latencies_s) == 1 and 0 < s.live_latencies_s[0] < 30

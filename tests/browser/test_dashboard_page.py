@@ -150,12 +150,13 @@ def test_a_long_run_holds_at_most_2000_points_per_curve_and_a_zoom_shows_full_re
 
 def test_moving_the_gj_slider_mid_run_changes_the_run(watched_page, dashboard_server):
     page = watched_page
-    open_dashboard(page, dashboard_server[0] + "?run_s=30&speed=1")
+    open_dashboard(page, dashboard_server[0] + "?run_s=120&speed=1")  # still running however slow the page
     page.locator(".amra-run button").click()
     before = wait_for(lambda: streamed(page)[1] and streamed(page)[1] > 0.5 and streamed(page), 60,
                       what="0.5 s of run")
     assert before[2] == 1500
     d = _session(dashboard_server)
+    assert d.session.running
     handle = page.locator(".amra-gj-slider .noUi-handle").first
     for attempt in range(3):  # a drag can be lost while a loaded browser is busy drawing
         box = handle.bounding_box()
@@ -187,14 +188,17 @@ def _value_events(page) -> list:
             if ev.get("kind") == "ModelChanged" and ev.get("attr") in ("value", "value_throttled")]
 
 
-def test_a_dragged_slider_sends_its_value_once_on_release(watched_page, dashboard_server):
-    """The server uses a slider's value on release only (Panel's throttled config), so a drag shows
-    its value in the page step by step and sends nothing until the release, which sends it once."""
+def test_a_dragged_slider_changes_gj_once_on_release(watched_page, dashboard_server):
+    """The server uses a slider's value on release only (Panel's throttled config): a drag shows its
+    value in the page step by step, and GJ changes once, to the released value (the values BokehJS
+    syncs during the drag are ignored by Panel; the release is sent once, as value_throttled)."""
     page = watched_page
     page.add_init_script(_RECORD_SENDS_JS)
     open_dashboard(page, dashboard_server[0])
     d = _session(dashboard_server)
     assert d.controls.gj_nm2 == 1500
+    changes = []
+    d.controls.param.watch(lambda e: changes.append(e.new), "gj_nm2")
     handle = page.locator(".amra-gj-slider .noUi-handle").first
     box = handle.bounding_box()
     x, y = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
@@ -208,16 +212,15 @@ def test_a_dragged_slider_sends_its_value_once_on_release(watched_page, dashboar
         page.mouse.move(x + 12 * k, y)
         titles.append(title.inner_text())
     page.wait_for_timeout(300)
-    during = _value_events(page)
+    assert changes == [] and d.controls.gj_nm2 == 1500  # nothing used while dragging
     page.mouse.up()
-    wait_for(lambda: d.controls.gj_nm2 != 1500, 15, what="the release to reach the server")
-    page.wait_for_timeout(300)
+    wait_for(lambda: d.controls.gj_nm2 != 1500, 60, what="the release to reach the server")
+    page.wait_for_timeout(1000)
     after = _value_events(page)
-    assert during == [], during  # nothing sent while dragging
-    assert len(set(titles)) == 5 and title0 not in titles, (title0, titles)  # but the page showed each step
-    assert [a for a, _ in after] == ["value_throttled"], after  # one message on release
-    shown = 10 ** after[0][1]
-    assert d.controls.gj_nm2 == pytest.approx(shown, rel=1e-3) and d.controls.gj_nm2 > 1500
+    assert len(set(titles)) == 5 and title0 not in titles, (title0, titles)  # the page showed each step
+    assert [a for a, _ in after].count("value_throttled") == 1, after  # the release, sent once
+    shown = 10 ** [v for a, v in after if a == "value_throttled"][0]
+    assert len(changes) == 1 and changes[0] == pytest.approx(shown, rel=1e-3) and changes[0] > 1500, changes
     shown_in_title = float(title.inner_text().rsplit(":", 1)[1])  # "GJ (log scale) [N m²/rad]: 6.10e+3"
     assert shown_in_title == pytest.approx(shown, rel=5e-3), (shown, title.inner_text())
     assert page.amra_errors == []
@@ -291,7 +294,7 @@ def test_a_shared_url_reopens_the_same_case(watched_page, dashboard_server, brow
 
 def test_closing_the_page_stops_the_run(watched_page, dashboard_server):
     page = watched_page
-    open_dashboard(page, dashboard_server[0] + "?run_s=30&speed=1")
+    open_dashboard(page, dashboard_server[0] + "?run_s=120&speed=1")
     page.locator(".amra-run button").click()
     wait_for(lambda: streamed(page)[0] > 0, 60, what="the run")
     d = _session(dashboard_server)
