@@ -5,8 +5,19 @@ from .common import emit, number
 
 
 def cmd_bench(args):
+    import sys
     from ..bench import run_bench
-    emit(run_bench(sim_seconds=args.seconds), args.json)
+    rep = run_bench(sim_seconds=args.seconds)
+    emit(rep, args.json)
+    if not rep["accuracy_ok"]:  # a speed bought with accuracy is no speed: fail loudly
+        bad = [f"{fid}: tip twist error {a['max_tip_twist_relative_error']:.3g} of its excursion (bound "
+               f"{a['tip_twist_relative_error_bound']:g}), rotor speed {a['max_omega_relative_error']:.3g} relative "
+               f"(bound {a['omega_relative_error_bound']:g})"
+               for fid, f in rep["fidelities"].items() if not (a := f["accuracy"])["within_bounds"]]
+        print("amra bench: error: accuracy lost against the reference at 1/8 of the step: " + "; ".join(bad),
+              file=sys.stderr)
+        return 1
+    return 0
 
 
 def register(sub) -> None:

@@ -1,0 +1,40 @@
+"""``amra bench``'s accuracy figures (issue 24 §2): the comparison against a run at 1/8 of the step
+must measure the integrator's error (it falls at RK4's order when the step halves), the default
+steps must stay within the stated bounds, and a bench whose accuracy is lost must fail loudly
+(exit 1, a message naming the fidelity). Speed itself is measured by the benchmark, never asserted."""
+from __future__ import annotations
+
+import pytest
+
+from amra_core import bench
+from amra_core.cli import bench as bench_cli
+
+
+@pytest.mark.parametrize("fidelity", ["rigid", "fem-coupled"])
+def test_default_steps_are_within_the_bounds(fidelity):
+    acc = bench._accuracy(fidelity)
+    assert acc["within_bounds"], acc
+    assert acc["reference_dt_s"] == pytest.approx(acc["dt_s"] / 8)
+    assert acc["at_t_s"] == pytest.approx(bench.ACCURACY_SPAN_S, abs=2 * acc["dt_s"] * 8)
+
+
+def test_the_measured_error_is_the_integrators(monkeypatch):
+    """Halving the step cuts the largest tip-twist error by 2^3 at least (RK4: 2^4 asymptotically):
+    the comparison measures truncation error, not sampling or interpolation."""
+    coarse = bench._accuracy("rigid", step_factor=1.0)
+    fine = bench._accuracy("rigid", step_factor=0.5)
+    assert coarse["max_tip_twist_error_rad"] > 8 * fine["max_tip_twist_error_rad"], (coarse, fine)
+    assert coarse["max_tip_twist_error_rad"] > 0
+
+
+def test_lost_accuracy_fails_loudly(monkeypatch, capsys):
+    acc = {"within_bounds": False, "max_tip_twist_relative_error": 0.05, "tip_twist_relative_error_bound": 0.02,
+           "max_omega_relative_error": 1e-6, "omega_relative_error_bound": 1e-4}
+    fake = {"fidelities": {"rigid": {"accuracy": acc}}, "accuracy_ok": False}
+    monkeypatch.setattr(bench, "run_bench", lambda sim_seconds: fake)
+
+    class Args:
+        seconds, json = 1.0, True
+    assert bench_cli.cmd_bench(Args()) == 1
+    err = capsys.readouterr().err
+    assert "accuracy lost" in err and "rigid" in err and "0.05" in err
