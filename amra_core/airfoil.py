@@ -19,7 +19,6 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
-from scipy.interpolate import PchipInterpolator
 
 # the jitted lookup and its Mach-correction constants live in amra_core.airfoil_kernel
 from .airfoil_kernel import MACH_CLIP, PG_FULL_DEG, PG_NONE_DEG, _coefficients_many, airfoil_coefficients  # noqa: F401
@@ -205,6 +204,9 @@ def compile_airfoil(table: AirfoilTable, step_deg: float = 0.25) -> AirfoilArray
     a = np.asarray(table.alpha_deg)[:-1]  # drop +180, it is -180 + 360
     a_ext = np.concatenate((a - 360.0, a, a + 360.0))
     grid_deg = -180.0 + step_deg * np.arange(n + 1)
+    # imported here, not at module level: scipy.interpolate takes ~0.3 s to import, and a process
+    # that never resamples a table (loads a stored result, answers --help) need not pay it
+    from scipy.interpolate import PchipInterpolator
     grids = []
     for col in (table.cl, table.cd, table.cm):
         y = np.array(col, dtype=float)
