@@ -55,14 +55,19 @@ class Boundaries:
 
 
 def column_boundaries(walk: ColumnWalk) -> Boundaries:
-    """Fold GJ and flutter GJ of a column walk. The one place that reads them, so that a
-    strength-aware definition (weak windows not counted) replaces only this function."""
-    flutter = None
-    for iv in walk.intervals:
-        if iv["kind"] == "flutter":
-            hi = math.inf if iv["gj_hi_nm2"] >= walk.gj_max_nm2 * (1 - 1e-12) else float(iv["gj_hi_nm2"])
-            flutter = hi if flutter is None else max(flutter, hi)
-    return Boundaries(walk.fold_gj_nm2, flutter)
+    """Fold GJ and strong-flutter GJ of a column walk, as the map defines them
+    (:func:`amra_core.boundary.intervals.classify`: weak windows and the fold's own approach do not
+    count). The strength follows the damping ratio alone here: the map's 20 s run per interval
+    would cost 18 times per column. ``inf`` when a strong interval reaches the top of the range."""
+    from .boundary.intervals import classify
+    c = classify(walk.intervals, walk.gj_max_nm2)
+    fold = c["fold_gj"] if c["fold_gj"] is not None else walk.fold_gj_nm2
+    flutter = c["flutter_gj"]
+    for iv in c["intervals"]:
+        if (iv["kind"] == "flutter" and iv.get("strength") == "strong" and not iv.get("fold_approach")
+                and iv["gj_hi_nm2"] >= walk.gj_max_nm2 * (1 - 1e-12)):
+            flutter = math.inf
+    return Boundaries(fold, flutter)
 
 
 def _stretch(stations, old_r0, old_tip, new_r0, new_tip):

@@ -41,7 +41,8 @@ def test_result_is_frozen_and_complete(study):
     folds = [b.fold_gj_nm2] + [r.fold_gj_nm2 for r in study.rows]
     assert study.fold_band_nm2 == (min(folds), max(folds))
     flutters = [v for v in [b.flutter_gj_nm2] + [r.flutter_gj_nm2 for r in study.rows] if v is not None]
-    assert study.flutter_band_nm2 == (min(flutters), max(flutters))
+    # (strong flutter only: at rigid CG 0.40 the 628-662 window is weak, so there may be none)
+    assert study.flutter_band_nm2 == ((min(flutters), max(flutters)) if flutters else None)
     from amra_core.cli.common import dumps_strict
     d = json.loads(dumps_strict(study.to_dict()))
     assert d["baseline"]["fold_gj_nm2"] == pytest.approx(b.fold_gj_nm2) and len(d["rows"]) == 6
@@ -58,7 +59,10 @@ def test_values_that_do_not_enter_the_trim_leave_the_fold_where_it_is(study):
         if r.parameter in ("hub_polar_inertia", "structural_damping"):
             assert abs(r.fold_gj_nm2 / b.fold_gj_nm2 - 1.0) <= study.rel_tol + 1e-9, r
         if r.parameter == "hub_polar_inertia":
-            assert r.flutter_gj_nm2 == pytest.approx(b.flutter_gj_nm2, rel=study.rel_tol), r
+            if b.flutter_gj_nm2 is None:  # no strong flutter in the column (the 628-662 window is weak)
+                assert r.flutter_gj_nm2 is None, r
+            else:
+                assert r.flutter_gj_nm2 == pytest.approx(b.flutter_gj_nm2, rel=study.rel_tol), r
 
 
 def test_more_incidence_needs_a_stiffer_blade(study):
@@ -67,9 +71,11 @@ def test_more_incidence_needs_a_stiffer_blade(study):
     the incidence and falls without it."""
     d = {r.change: r for r in study.rows if r.parameter == "incidence"}
     b = study.baseline.fold_gj_nm2
-    # each fold is bracketed to rel_tol from below: the changes (about 3 %) must exceed two brackets
-    assert d[0.1].fold_gj_nm2 > b * (1 + study.rel_tol) ** 2
-    assert d[-0.1].fold_gj_nm2 * (1 + study.rel_tol) ** 2 < b
+    # each fold is the top of its bracket (width rel_tol), so two folds compare to one bracket; the
+    # map's fold includes a merged fold approach (amra_core.boundary.intervals), which moves the -10 %
+    # fold from 399 to 406 N m^2/rad: the change is then about 2 % (+10 %: about 3 %)
+    assert d[0.1].fold_gj_nm2 > b * (1 + study.rel_tol)
+    assert d[-0.1].fold_gj_nm2 * (1 + study.rel_tol) < b
 
 
 def test_rows_are_the_column_walk_of_the_perturbed_rotor(study):
