@@ -191,7 +191,11 @@ class Dashboard(pn.viewable.Viewer):
             self.refresh.kick()
         else:
             self.controls.rotor = UPLOADED
-        self.notify(f"rotor file {filename!r} loaded: {rotor.name}, R = {rotor.radius_m:g} m", "info")
+        st = rotor.stations
+        self.notify(f"rotor file {filename!r} loaded: {rotor.name}, R = {rotor.radius_m:g} m. Its own GJ "
+                    f"{st.mean('gj_nm2'):.4g} N m²/rad, EA {100 * st.mean('x_ea'):.1f} % and CG "
+                    f"{100 * st.mean('x_cg'):.1f} % chord (span means) are overridden by the controls' uniform "
+                    f"GJ, EA and CG", "info")
         return True
 
     def load_cell(self, cell) -> None:

@@ -268,3 +268,12 @@ def test_map_boundaries_and_bands_from_the_columns():
     bands = flutter_bands(cols, 4.0)
     assert [(b["strength"], b["bottom"], b["top"]) for b in bands] == [("weak", 628.0, 662.0), ("strong", 600.0, 700.0)]
     assert bands[0]["left"] == pytest.approx(40 - 1.4) and "damping ratio -0.010" in bands[0]["text"]
+
+
+def test_an_uploaded_rotor_says_its_own_values_are_overridden(dash):
+    from pathlib import Path
+    data = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
+    assert dash.upload(data, "mine.toml")
+    level, text = dash.messages[-1]
+    assert level == "info" and "Its own GJ 1471 N m²/rad, EA 31.4 % and CG 33.0 % chord" in text
+    assert "overridden by the controls' uniform GJ, EA and CG" in text
