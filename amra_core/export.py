@@ -21,8 +21,8 @@ EXPORT_DIGITS = 8
 
 
 def _fmt(v) -> str:
-    if isinstance(v, float):
-        return "" if not math.isfinite(v) else f"{v:.{EXPORT_DIGITS}g}"
+    if isinstance(v, float):  # non-finite values as nan / inf / -inf, which numpy and pandas read back
+        return repr(v) if not math.isfinite(v) else f"{v:.{EXPORT_DIGITS}g}"
     return str(v)
 
 
@@ -54,8 +54,8 @@ def header_lines(meta: Mapping[str, object]) -> list[str]:
 
 def table_csv(columns: Iterable[str], rows, meta: Mapping[str, object] | None = None) -> str:
     """A CSV text: header lines from ``meta``, one line of column names (units in the names), then
-    ``rows`` (a 2-D array or a list of rows: floats to :data:`EXPORT_DIGITS` digits, blank where not
-    finite)."""
+    ``rows`` (a 2-D array or a list of rows: floats to :data:`EXPORT_DIGITS` digits, ``nan``/``inf``
+    where not finite)."""
     out = io.StringIO()
     for line in header_lines(meta or {}):
         out.write(line + "\n")

@@ -1,5 +1,5 @@
 """Exports that stand alone (amra_core.export): names that say the case, header lines with the
-parameters and version, numbers to 8 significant digits, blanks for non-finite values."""
+parameters and version, numbers to 8 significant digits, nan/inf for non-finite values."""
 from __future__ import annotations
 
 import io
@@ -23,7 +23,7 @@ def test_table_csv_round_trips_with_its_header():
     lines = text.splitlines()
     assert lines[:3] == [f"# AMRA {__version__}", "# fidelity: rigid", "# gj_nm2: 100"]
     assert lines[3] == "t_s,omega_rad_s,teeter_rad"
-    assert lines[4] == "0,37.387452,1e-12" and lines[5] == "0.0025,,-3"
+    assert lines[4] == "0,37.387452,1e-12" and lines[5] == "0.0025,nan,-3"
     back = np.genfromtxt(io.StringIO(text), delimiter=",", comments="#", skip_header=4)
     np.testing.assert_allclose(back[0], [0.0, 37.387452, 1e-12])
     assert np.isnan(back[1, 1])
