@@ -76,6 +76,6 @@ _FORWARD = ("as in axial flight: the rotor speed decays within seconds and the d
 PAPER_CASES = MappingProxyType({
     "fig10": PaperCase("fig10", "Fig. 10", "rigid", 0.0, 100.0, 414.0, _AXIAL.format(fig="Fig. 10")),
     "fig11": PaperCase("fig11", "Fig. 11", "fem-coupled", 0.0, 400.0, 670.0, _AXIAL.format(fig="Fig. 11")),
-    "fig12": PaperCase("fig12", "Fig. 12", "rigid", 0.1, 300.0, 574.0, _FORWARD.format(fig="Fig. 12")),
+    "fig12": PaperCase("fig12", "Fig. 12", "rigid", 0.1, 300.0, 557.0, _FORWARD.format(fig="Fig. 12")),
     "fig13": PaperCase("fig13", "Fig. 13", "fem-coupled", 0.1, 600.0, 925.0, _FORWARD.format(fig="Fig. 13")),
 })
