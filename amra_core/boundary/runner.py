@@ -226,7 +226,11 @@ class MapRun:
             self.store = None
 
     def result(self) -> BoundaryMap:
-        if not self._finished:
+        """The map: drains the iteration first if it has not started; called while the cells are
+        still being iterated (a consumer's progress view), it summarises the cells found so far
+        without restarting the walk (a second pass would count this map's own stored columns as
+        read from the store)."""
+        if not self._finished and self._t0 is None:
             for _ in self:
                 pass
         columns, boundaries = _summarise(self.spec, self.by_col, self.info)

@@ -251,6 +251,22 @@ def test_iter_map_yields_cells_then_result():
     assert {(c.cg, c.gj_nm2) for c in cells} == {(c.cg, c.gj_nm2) for c in bmap.cells}
 
 
+def test_result_while_iterating_summarises_without_restarting_the_walk(tmp_path):
+    """A progress view asks for the columns while the cells still arrive: no second walk, and the
+    map's own freshly stored columns are not counted as read from the store."""
+    spec = MapSpec(cg_values=(0.40, 0.46), n_coarse=4, gj_rel_tol=0.2)
+    store = CellStore(tmp_path / "s.sqlite", solver=solver_fingerprint())
+    run = iter_map(spec, workers=2, store=store)
+    seen = []
+    for cell in run:
+        seen.append(cell)
+        part = run.result()
+        assert part.cached_cases == 0 and part.cases >= len(seen)  # a finished column's cells at once
+    bmap = run.result()
+    assert bmap.complete and bmap.cached_cases == 0 and bmap.cases == len(seen)
+    store.close()
+
+
 def test_csv_and_json(tmp_path, full_map):
     bmap, _, _ = full_map
     d = json.loads(json.dumps(bmap.to_dict(), allow_nan=False))
