@@ -66,8 +66,9 @@ def _run_small(iv: dict, weak_amplitude_deg: float) -> bool:
 
 
 def strength_of(iv: dict, weak_damping: float = WEAK_DAMPING, weak_amplitude_deg: float = WEAK_AMPLITUDE_DEG) -> str:
-    """``weak`` | ``strong`` of a flutter interval (module docstring). Intervals without mode data
-    (judged by time marching) are ``strong``: nothing says they are marginal."""
+    """``weak`` | ``strong`` of a flutter interval (module docstring). Intervals judged by time
+    marching carry the fitted ``peak_growth_rate_1_s`` and ``damping_ratio`` of their most unstable
+    cell instead of mode data; without either they are ``strong``: nothing says they are marginal."""
     osc, mono = iv.get("oscillatory"), iv.get("monotonic_growth_rate_1_s")
     if osc is None and mono is None:
         weak = iv.get("peak_growth_rate_1_s") is not None and iv.get("damping_ratio") is not None \

@@ -2,6 +2,7 @@
 column walk, and the worker entry point :func:`compute_column` (never raises)."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from typing import Optional
 
@@ -170,11 +171,42 @@ def compute_column(task: ColumnTask, on_point=None, cancel=None) -> ColumnResult
                 interval_outcomes(task, w.points, intervals, cancel)
         if task.method == "time":
             intervals, crit = _summary_of_cells(cells, task)
+            with np.errstate(all="ignore"):
+                _time_interval_strength(task, w.points, cells, intervals, cancel)
         return ColumnResult(task.cg, cells, intervals, crit, w.fold_gj_nm2, w.n_trims, w.wall_time_s,
                             any(c.verdict == "failed" for c in cells), w.cancelled)
     except Exception as exc:  # noqa: BLE001 - a failed column is a result, not a crash
         return ColumnResult(task.cg, [failed_cell(task.cg, task.gj_max, f"{type(exc).__name__}: {exc}")], [], None,
                             None, failed=True)
+
+
+def _time_interval_strength(task: ColumnTask, points: list, cells: list, intervals: list, cancel=None) -> None:
+    """``method='time'``: what the eigen-analysis gives a flutter interval, from its time-judged cells,
+    so that :func:`amra_core.boundary.intervals.strength_of` applies the same weak/strong rule:
+    ``peak_growth_rate_1_s`` (the largest fitted envelope growth [1/s]), ``damping_ratio`` of that
+    oscillation (-sigma / sqrt(sigma^2 + (2 pi f)^2); None if it does not oscillate: then strong),
+    and the 20 s run from its most unstable point (:func:`interval_outcomes`)."""
+    from types import SimpleNamespace
+    by_gj = {p.gj_nm2: p for p in points}
+    unstable = []
+    for c in cells:
+        p = by_gj.get(c.gj_nm2)
+        if cell_class(c) == "flutter" and c.growth_rate_per_s is not None and p is not None and p.trim is not None:
+            unstable.append((c, p))
+    for iv in intervals:
+        if iv["kind"] != "flutter":
+            continue
+        lo, hi = iv.get("gj_lo_point_nm2", iv["gj_lo_nm2"]), iv.get("gj_hi_point_nm2", iv["gj_hi_nm2"])
+        inside = [(c, p) for c, p in unstable if lo <= c.gj_nm2 <= hi]
+        if not inside:
+            continue
+        c, _ = max(inside, key=lambda cp: cp[0].growth_rate_per_s)
+        sigma, f = float(c.growth_rate_per_s), c.frequency_hz
+        iv["peak_growth_rate_1_s"] = sigma
+        iv["damping_ratio"] = (-sigma / math.hypot(sigma, 2 * math.pi * f)) if f else None
+    pseudo = [SimpleNamespace(kind="flutter", trim=p.trim, gj_nm2=c.gj_nm2, max_real_part_per_s=c.growth_rate_per_s)
+              for c, p in unstable]
+    interval_outcomes(task, pseudo, intervals, cancel)
 
 
 def _summary_of_cells(cells: list, task: ColumnTask):
