@@ -6,6 +6,7 @@ import math
 from panel.util import parse_query
 
 from app.controls import Controls
+from app.presets import PRESETS
 from app.url_sync import URL_KEYS, apply_query, query_string
 
 
@@ -25,8 +26,11 @@ def test_round_trip_reopens_exactly_the_same_case():
 
 def test_the_preset_is_applied_first_so_explicit_values_win():
     b = Controls()
+    fig10 = PRESETS["fig10"].as_dict()
+    assert fig10["gj_nm2"] != 250.0
     assert apply_query(b, {"gj": 250.0, "preset": "fig10"}) == []
-    assert b.gj_nm2 == 250.0 and b.fidelity == "rigid" and b.run_s == 10.0
+    assert b.gj_nm2 == 250.0  # the link's explicit value
+    assert b.fidelity == fig10["fidelity"] and b.run_s == fig10["run_s"]  # the rest from the preset
 
 
 def test_bad_values_are_reported_by_name_and_ignored():
