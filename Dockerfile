@@ -66,7 +66,7 @@ RUN pip install --no-deps --no-build-isolation -e . \
 # (The warm-up also opens the map registry's store: a scratch one, removed, so nothing but the
 # cache is left in the image.)
 USER amra
-RUN AMRA_STORE=/tmp/warm-store.sqlite python3 app/warmup.py \
+RUN AMRA_STORE=/tmp/warm-store.sqlite python3 -m app.warmup \
     && rm -f /tmp/warm-store.sqlite* && du -sh "$NUMBA_CACHE_DIR"
 
 ENV AMRA_ADDRESS=0.0.0.0 \

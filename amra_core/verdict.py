@@ -302,12 +302,36 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     return v
 
 
+def _collapse_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
+                             hover_induced_m_s, branch) -> Optional[Verdict]:
+    """A run whose integration failed *after* its rotor speed had collapsed (below 50 % of trim)
+    has answered the paper's question before the failure: judged on its finite rows up to the
+    failure, with the failure told in the explanation. None if the rotor speed had not collapsed
+    (then the run is a ``numerical-failure``: nothing is known)."""
+    finite = np.isfinite(h).all(axis=1)
+    n_ok = len(h) if finite.all() else int(np.argmin(finite))
+    if n_ok < 2 or not (h[:n_ok, cols["omega_rad_s"]] < 0.5 * omega_ref).any():
+        return None
+    v = _judge(h[:n_ok], columns, omega_ref, axial, "finished", trimmed, ref_row, perturbation_scale,
+               hover_induced_m_s, branch)
+    if v.verdict in ("undetermined", "numerical-failure"):
+        return None
+    t_fail = float(h[n_ok - 1, cols["t_s"]])
+    v.explanation += (f"; after the collapse the time step left its stability region at t = {t_fail:.2f} s "
+                      "(run stopped there)")
+    return v
+
+
 def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_scale, hover_induced_m_s,
            branch) -> Verdict:
     cols = {c: i for i, c in enumerate(columns)}
     if len(h) == 0:
         return Verdict("undetermined", None, None, None, explanation="no data yet: nothing has been simulated")
     if status == "numerical-failure" or not np.isfinite(h).all():
+        after = _collapse_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
+                                         hover_induced_m_s, branch)
+        if after is not None:
+            return after
         return Verdict("numerical-failure", None, None, None, explanation=("the time step left its stability region (non-finite state or an impossible "
                                      "jump of the rotor speed): the run was stopped; try a smaller dt_s"))
     t = h[:, cols["t_s"]]

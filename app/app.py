@@ -26,7 +26,7 @@ from .rotor_upload import UploadError, parse_rotor_upload
 from .server.pool import LatestTasks, get_analysis_pool
 from .server.settings import ServerSettings
 from .session import Session
-from .throttle import Throttle
+from .throttle import Throttle, on_event_loop
 from .views.disc import DiscView
 from .views.fan import FanView
 from .views.ladder import LadderView
@@ -105,9 +105,10 @@ class Dashboard(pn.viewable.Viewer):
         s.subscribe(Applied, lambda ev: self.live.mark(ev.t_s, change_label(ev.values)))
         self._run_preset = "custom"  #: the preset the current run was started with
         s.subscribe(Notice, lambda ev: self.notify(ev.text, ev.level))
-        c.param.watch(self.start_run, "run")
+        # Run and Reset clear the plots' Bokeh sources: on the event loop, with the document lock
+        c.param.watch(lambda e: on_event_loop(doc, self.start_run), "run")
         c.param.watch(lambda e: s.stop(), "stop")
-        c.param.watch(self.reset, "reset")
+        c.param.watch(lambda e: on_event_loop(doc, self.reset), "reset")
         c.param.watch(self.run_ladder, "ladder")
         c.param.watch(self._on_live, list(LIVE_PARAMETERS))
         c.param.watch(self._on_case, list(CASE_PARAMETERS))

@@ -5,6 +5,10 @@ asked for, at most once per period, and never while nobody asks (no periodic cal
 The call goes through ``pn.state.execute`` (a next-tick callback with the document lock held),
 so the function may change any model. Without a served document (tests, scripts) a kick only
 marks the work as due, and :meth:`run_due` runs it in the caller's thread.
+
+:func:`on_event_loop` is the same hop without the rate limit, for button clicks: Panel hands a
+click to its watchers without the document lock, and the plots' raw Bokeh sources may change only
+with it held.
 """
 from __future__ import annotations
 
@@ -14,6 +18,17 @@ from typing import Callable
 
 import panel as pn
 from panel.io.state import set_curdoc
+
+
+def on_event_loop(doc, fn: Callable[[], None]) -> None:
+    """Run ``fn`` as a next-tick callback of the served document ``doc`` (``pn.state.execute``:
+    the document lock held, Panel's documented way to change Bokeh models from a callback that
+    does not hold it); at once without a served document (tests, scripts)."""
+    if doc is None or doc.session_context is None:
+        fn()
+        return
+    with set_curdoc(doc):
+        pn.state.execute(fn, schedule=True)
 
 
 class Throttle:

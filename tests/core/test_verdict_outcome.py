@@ -87,3 +87,22 @@ def test_every_outcome_is_from_the_vocabulary():
     for h in (history(lambda t: 0.01 * np.exp(-0.3 * t)), history(lambda t: 1e-4 * np.exp(0.3 * t)),
               history(lambda t: 0.01 + 0 * t, t_end=0.5)):
         assert run_judge(h).outcome in OUTCOMES
+
+
+def test_a_failure_after_the_collapse_keeps_the_collapse_as_the_answer():
+    """The rotor speed falls below half its trim at 2 s; the integration breaks down at 15 s (the rows
+    from there are non-finite). The collapse answered the question first: the verdict is the
+    collapse's, and it names the failure; a failure before any collapse knows nothing."""
+    omega = lambda t: OM0 * np.maximum(1.0 - 0.3 * t, 0.3)  # noqa: E731 - below OM0/2 from t = 1.67 s
+    h = history(lambda t: 0.01 + 0 * t, omega=omega)
+    h[h[:, C["t_s"]] >= 15.0, 1:] = np.nan
+    v = judge(h, HISTORY_COLUMNS, OM0, True, "numerical-failure", False, h[0].copy(), 0.01,
+              hover_induced_m_s=V_H, branch="normal")
+    assert v.verdict == "no-autorotation" and v.outcome == "rotor-speed-collapse", v
+    assert v.collapse_time_s == __import__("pytest").approx(5.0 / 3.0, abs=0.01)
+    assert "left its stability region at t = 15.00 s" in v.explanation
+    steady = history(lambda t: 0.01 + 0 * t)
+    steady[steady[:, C["t_s"]] >= 15.0, 1:] = np.nan
+    v = judge(steady, HISTORY_COLUMNS, OM0, True, "numerical-failure", True, steady[0].copy(), 0.01,
+              hover_induced_m_s=V_H, branch="normal")
+    assert v.verdict == "numerical-failure" and v.outcome == "undetermined"
