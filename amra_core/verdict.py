@@ -302,23 +302,34 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     return v
 
 
-def _collapse_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
-                             hover_induced_m_s, branch) -> Optional[Verdict]:
-    """A run whose integration failed *after* its rotor speed had collapsed (below 50 % of trim)
-    has answered the paper's question before the failure: judged on its finite rows up to the
-    failure, with the failure told in the explanation. None if the rotor speed had not collapsed
-    (then the run is a ``numerical-failure``: nothing is known)."""
+def _answer_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
+                           hover_induced_m_s, branch) -> Optional[Verdict]:
+    """A run whose integration failed after it had already answered: judged on its finite rows up
+    to the failure, with the failure told in the explanation, when before it (a) the rotor speed
+    collapsed below 50 % of trim (the paper's question answered), or (b) the perturbation grew for
+    seconds (an instability's growth fitted over whole revolutions, ``flutter`` or ``divergence``,
+    above :data:`GROWTH_THRESHOLD_PER_S`): the motion ran away until the state left the model's
+    range. A time step outside its stability region blows up within a few steps, too fast for an
+    envelope fitted over revolutions, so it is still told as ``numerical-failure``. None otherwise."""
     finite = np.isfinite(h).all(axis=1)
     n_ok = len(h) if finite.all() else int(np.argmin(finite))
-    if n_ok < 2 or not (h[:n_ok, cols["omega_rad_s"]] < 0.5 * omega_ref).any():
+    if n_ok < 2:
         return None
     v = _judge(h[:n_ok], columns, omega_ref, axial, "finished", trimmed, ref_row, perturbation_scale,
                hover_induced_m_s, branch)
-    if v.verdict in ("undetermined", "numerical-failure"):
+    collapsed = bool((h[:n_ok, cols["omega_rad_s"]] < 0.5 * omega_ref).any())
+    grew = v.verdict in ("flutter", "divergence") and v.growth_rate_per_s is not None \
+        and v.growth_rate_per_s > GROWTH_THRESHOLD_PER_S
+    if v.verdict in ("undetermined", "numerical-failure") or not (collapsed or grew):
         return None
     t_fail = float(h[n_ok - 1, cols["t_s"]])
-    v.explanation += (f"; after the collapse the time step left its stability region at t = {t_fail:.2f} s "
-                      "(run stopped there)")
+    if grew and not collapsed:
+        v.outcome = "runaway"
+        v.explanation += (f"; it grew until the state left the model's range: the integration stopped at "
+                          f"t = {t_fail:.2f} s")
+    else:
+        v.explanation += (f"; after the collapse the time step left its stability region at t = {t_fail:.2f} s "
+                          "(run stopped there)")
     return v
 
 
@@ -328,8 +339,8 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
     if len(h) == 0:
         return Verdict("undetermined", None, None, None, explanation="no data yet: nothing has been simulated")
     if status == "numerical-failure" or not np.isfinite(h).all():
-        after = _collapse_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
-                                         hover_induced_m_s, branch)
+        after = _answer_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
+                                       hover_induced_m_s, branch)
         if after is not None:
             return after
         return Verdict("numerical-failure", None, None, None, explanation=("the time step left its stability region (non-finite state or an impossible "

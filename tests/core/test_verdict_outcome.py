@@ -106,3 +106,21 @@ def test_a_failure_after_the_collapse_keeps_the_collapse_as_the_answer():
     v = judge(steady, HISTORY_COLUMNS, OM0, True, "numerical-failure", True, steady[0].copy(), 0.01,
               hover_induced_m_s=V_H, branch="normal")
     assert v.verdict == "numerical-failure" and v.outcome == "undetermined"
+
+
+def test_a_failure_after_seconds_of_growth_is_the_instability_running_away():
+    """An oscillation growing at +1 1/s for 8 s, then non-finite rows (the state left the model's
+    range): a flutter that ran away, at its fitted growth; a history that decayed and then blew up
+    within one step (a time step outside its stability region) stays a numerical failure."""
+    h = history(lambda t: 1e-4 * np.exp(1.0 * t))
+    h[h[:, C["t_s"]] >= 8.0, 1:] = np.nan
+    v = judge(h, HISTORY_COLUMNS, OM0, True, "numerical-failure", True, h[0].copy(), 0.01,
+              hover_induced_m_s=V_H, branch="normal")
+    assert v.verdict == "flutter" and v.outcome == "runaway", v
+    assert v.growth_rate_per_s == __import__("pytest").approx(1.0, rel=0.1)
+    assert "left the model's range" in v.explanation and "t = 8.00 s" in v.explanation
+    d = history(lambda t: 0.01 * np.exp(-0.3 * t))
+    d[d[:, C["t_s"]] >= 8.0, 1:] = np.nan
+    v = judge(d, HISTORY_COLUMNS, OM0, True, "numerical-failure", True, d[0].copy(), 0.01,
+              hover_induced_m_s=V_H, branch="normal")
+    assert v.verdict == "numerical-failure"
