@@ -100,7 +100,7 @@ def test_runs_as_non_root_and_uses_the_build_cache(container):
     r = run_in(name, "sh", "-c", "touch /opt/amra/amra_core/x 2>&1; echo rc=$?")
     assert "rc=0" not in r.stdout
     # a fresh process: every kernel is loaded from the build-time cache, none compiled and saved
-    r = run_in(name, "python3", "app/warmup.py", env={"NUMBA_DEBUG_CACHE": "1", "AMRA_STORE": "/tmp/s.sqlite"},
+    r = run_in(name, "python3", "-m", "app.warmup", env={"NUMBA_DEBUG_CACHE": "1", "AMRA_STORE": "/tmp/s.sqlite"},
                timeout=300)
     assert r.returncode == 0, r.stderr
     assert "data loaded from" in r.stdout

@@ -121,8 +121,9 @@ def test_store_on_read_only_disk_page_says_so_and_runs_work(amra_server, chromiu
 def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
     store = tmp_path / "store.sqlite"
     env = {"AMRA_STORE": str(store), "AMRA_MAP_WORKERS": "1"}
-    n_cols = 3
-    url_q = f"main?map_columns={n_cols}&map_coarse=3"
+    from app.app import map_columns
+    n_cols = len(map_columns(3))  # 3 asked for, and the paper's 40 % column: 4
+    url_q = "main?map_columns=3&map_coarse=3"
     port = free_port()
     srv = start_amra_serve(tmp_path, port, env_extra=env)
     seen = {}
