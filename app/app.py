@@ -34,6 +34,7 @@ from .views.map import MapView
 from .views.modes import ModesView
 from .views.help import HelpView
 from .views.rotor import LiveRotor
+from .views.sensitivity import SensitivityView
 from .views.status import StatusView, run_html
 
 TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
@@ -97,6 +98,10 @@ class Dashboard(pn.viewable.Viewer):
         self.map = (MapView(registry, who=id(self), on_pick=self.load_cell, doc=doc) if registry is not None
                     else None)
         self.uploaded = None
+        self.sensitivity = (SensitivityView(s, self._sensitivity_case, self.tasks.submit, self.map.show_sensitivity,
+                                            self.notify) if self.map is not None else None)
+        if self.sensitivity is not None:  # its text is a Bokeh Div: on the event loop, with the lock
+            self.sensitivity.button.on_click(lambda e: on_event_loop(doc, self.sensitivity.start))
         self.last_history: Optional[np.ndarray] = None
         self._locus_key = None
         self.refresh = Throttle(self.refresh_analyses, REFRESH_PERIOD_S, doc)
@@ -218,6 +223,11 @@ class Dashboard(pn.viewable.Viewer):
         if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):
             self.status.note.object = "this change takes effect at the next run (only GJ, EA and CG apply live)"
         self.refresh.kick()
+
+    def _sensitivity_case(self):
+        """(rotor, flight, settings, CG [chord fraction], map spec) of the current case."""
+        c = self.controls
+        return c.rotor_obj(self.uploaded), c.flight(), c.settings(), c.cg_pct / 100.0, self.map_spec()
 
     def map_spec(self) -> MapSpec:
         c = self.controls
@@ -352,7 +362,9 @@ class Dashboard(pn.viewable.Viewer):
                           sizing_mode="stretch_width")
         self.live.present(self.controls.present)
         self.controls.param.watch(lambda e: self.present(e.new), "present")
-        tabs = pn.Tabs(("Boundary map", self.map if self.map is not None else pn.pane.Markdown("map disabled")),
+        the_map = pn.Column(self.map, self.sensitivity, sizing_mode="stretch_width") if self.map is not None \
+            else pn.pane.Markdown("map disabled")
+        tabs = pn.Tabs(("Boundary map", the_map),
                        ("Modes & root locus", self.modes), ("Live rotor", self.rotor_view),
                        ("Rotor disc", self.disc), ("Fan plot", self.fan),
                        ("Fidelity ladder", self.ladder), ("Help", HelpView(self.controls)), dynamic=True,

@@ -175,3 +175,13 @@ def mode_frames(rotor, flight, settings, real_part_per_s: float, frequency_hz: f
             f"the mode's true mix is {mix}.")
     return {"r_m": tr.model.arrays.st[:, 0].tolist(), "flap": (a.flap * flap_to_m).tolist(),
             "twist": twist.tolist(), "teeter": (a.teeter * flap_to_m).tolist(), "text": text}
+
+
+def sensitivity_study(rotor, flight, settings, cg: float, gj_range: tuple, rel_tol: float, n_probe: int) -> dict:
+    """The fold and flutter GJ of CG column ``cg`` [chord fraction] with every estimated rotor value
+    changed by -10 % and +10 % (:func:`amra_core.sensitivity.sensitivity`, the map's own column
+    walk over ``gj_range`` [N m^2/rad] at the map's ``rel_tol`` and probe grid), as its JSON dict."""
+    from amra_core.sensitivity import sensitivity
+    with np.errstate(all="ignore"):
+        return sensitivity(rotor, cg, settings=settings, flight=flight, gj_min_nm2=gj_range[0],
+                           gj_max_nm2=gj_range[1], rel_tol=rel_tol, n_probe=n_probe).to_dict()

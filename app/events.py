@@ -110,3 +110,9 @@ class Fan:
 @dataclass(frozen=True)
 class Ladder:
     result: dict  #: app.compute.run_ladder
+
+@dataclass(frozen=True)
+class Sensitivity:
+    """The boundaries' sensitivity to every estimate at one CG column
+    (:meth:`amra_core.sensitivity.SensitivityResult.to_dict`)."""
+    result: dict

@@ -156,6 +156,8 @@ class MapView(pn.viewable.Viewer):
         self._lines_key = None
         self.eta = Eta()
         self.ea_source = ColumnDataSource({"x": [32.0]})
+        #: sensitivity bands (app.views.sensitivity): per boundary at one CG, lowest to highest GJ
+        self.sens_source = ColumnDataSource({"cg_pct": [], "lo": [], "hi": [], "text": []})
 
     # -- subscription
     def follow(self, spec: MapSpec) -> None:
@@ -167,6 +169,7 @@ class MapView(pn.viewable.Viewer):
         self.cells = []
         self.eta = Eta()
         self.ea_source.data = {"x": [100.0 * spec.ea]}
+        self.sens_source.data = {"cg_pct": [], "lo": [], "hi": [], "text": []}  # another case's bands
         self._draw(reset=True)
         self.progress.value = 0
         if self.job.state == "busy" and self.doc is not None:  # the queue was full: ask again later
@@ -227,6 +230,24 @@ class MapView(pn.viewable.Viewer):
         cgs = sorted(self.job.spec.cg_values) if self.job is not None else []
         return 100.0 * min((b - a for a, b in zip(cgs, cgs[1:])), default=0.05)
 
+    def show_sensitivity(self, result: dict) -> None:
+        """Bands at the study's CG (:mod:`app.views.sensitivity`): fold (left of the column) and strong
+        flutter (right), each from its lowest to its highest GJ over the baseline and every ±10 %
+        change of an estimate; a band open at the top (unstable at the top of the GJ range) is drawn
+        to the top of the plot."""
+        cg_pct, top = 100.0 * result["cg"], self.job.spec.gj_max if self.job is not None else 3000.0
+        rows = []
+        for dx, name, key in ((-0.6, "fold", "fold_band_nm2"), (0.6, "strong flutter", "flutter_band_nm2")):
+            band = result.get(key)
+            if band is None:
+                continue
+            lo, hi = band
+            open_top = not math.isfinite(hi)
+            rows.append((cg_pct + dx, lo, top * 1.2 if open_top else hi,
+                         f"{name} GJ over every estimate ±{100 * result['step']:.0f} %: {lo:.0f} to "
+                         + ("the top of the range" if open_top else f"{hi:.0f}") + " N m²/rad"))
+        self.sens_source.data = {k: [r[i] for r in rows] for i, k in enumerate(("cg_pct", "lo", "hi", "text"))}
+
     def mark(self, cg_pct: float, gj: float) -> None:
         self.marker_source.data = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]}
 
@@ -280,6 +301,12 @@ class MapView(pn.viewable.Viewer):
             fig.scatter("cg_pct", "gj_nm2", source=self.flutter_sources[fid], color=colour, marker="triangle", size=8)
             items += [LegendItem(label=f"{fid}: fold", renderers=[fold]),
                       LegendItem(label=f"{fid}: strong flutter", renderers=[flutter])]
+        sens = fig.segment(x0="cg_pct", y0="lo", x1="cg_pct", y1="hi", source=self.sens_source, line_color="#000000",
+                           line_width=7, line_alpha=0.3)
+        for end in ("lo", "hi"):
+            fig.scatter("cg_pct", end, source=self.sens_source, marker="dash", size=16, line_width=2, color="#000000")
+        fig.add_tools(HoverTool(renderers=[sens], tooltips=[("", "@text")]))
+        items.append(LegendItem(label="sensitivity band (estimates ±10 %)", renderers=[sens]))
         star = fig.scatter("cg_pct", "gj_nm2", source=self.marker_source, marker="star", size=20, color="gold",
                            line_color="black")
         items.append(LegendItem(label="current case", renderers=[star]))

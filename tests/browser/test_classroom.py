@@ -121,3 +121,21 @@ def test_help_is_in_the_page(watched_page, dashboard_server):
     link = page.get_by_role("link", name="validation report").first
     expect(link).to_be_visible()
     shot(page, "c05-help")
+
+
+def test_the_sensitivity_study_fills_its_table_and_bands(watched_page, dashboard_server):
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?map_columns=2&map_coarse=3")
+    button = page.locator(".amra-sensitivity button")
+    button.scroll_into_view_if_needed()
+    button.click()
+    info = page.locator(".amra-sensitivity-info")
+    expect(info).to_contain_text("Sensitivity at CG 40.0 % chord", timeout=300_000)
+    expect(info).to_contain_text("fold GJ")
+    d = _session(dashboard_server)
+    result = d.sensitivity.result
+    assert result is not None and len(d.map.sens_source.data["lo"]) >= 1
+    table = page.get_by_role("table").filter(has_text="Fold GJ [N m²/rad]")
+    expect(table).to_be_visible()
+    expect(table.locator("tbody tr")).to_have_count(len(result["rows"]))
+    shot(page, "c07-sensitivity")

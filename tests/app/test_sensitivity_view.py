@@ -1,0 +1,68 @@
+"""The map tab's sensitivity study (issue 21 §6): the button walks the current CG column again with
+every estimate ±10 % in the analysis pool; the answer is a table, a band per boundary on the map at
+that CG (lowest to highest over the baseline and every change) and a CSV that reads back."""
+from __future__ import annotations
+
+import io
+
+import pandas as pd
+import pytest
+
+from amra_core.sensitivity import ESTIMATE_NAMES
+from app.app import Dashboard
+from app.server.map_jobs import MapRegistry
+from app.views.sensitivity import HEADERS, TABLE_COLUMNS
+
+
+@pytest.fixture
+def dash(server_settings, analysis_pool):
+    reg = MapRegistry(server_settings)
+    d = Dashboard(server_settings, registry=reg, pool=analysis_pool)
+    d.controls.param.update(map_columns=2, map_coarse=3)
+    yield d
+    d.close()
+    reg.close()
+
+
+def _pump_until(d, pred, wait, timeout_s, what):
+    def step():
+        d.pump()
+        return pred()
+    wait(step, timeout_s, what=what)
+
+
+def test_sensitivity_study_draws_bands_and_exports_its_table(dash, wait):
+    dash.refresh_analyses()  # the map follows the case
+    dash.sensitivity.start()
+    assert dash.sensitivity.busy.visible and "computing" in dash.sensitivity.info.object
+    _pump_until(dash, lambda: dash.sensitivity.result is not None, wait, 900, "the sensitivity study")
+    r = dash.sensitivity.result
+    assert r["cg"] == pytest.approx(0.40) and r["fidelity"] == "rigid" and r["step"] == pytest.approx(0.10)
+    assert len(r["rows"]) == 2 * len(ESTIMATE_NAMES)
+    base = r["baseline"]["fold_gj_nm2"]
+    lo, hi = r["fold_band_nm2"]
+    folds = [row["fold_gj_nm2"] for row in r["rows"] if row["fold_gj_nm2"] is not None]
+    assert lo == min(folds + [base]) and hi == max(folds + [base]) and lo < base < hi  # some estimate moves it
+    bands = dash.map.sens_source.data
+    fold_at = list(bands["lo"]).index(lo)
+    assert bands["hi"][fold_at] == hi and bands["cg_pct"][fold_at] == pytest.approx(40.0 - 0.6)
+    assert "fold GJ" in bands["text"][fold_at] and not dash.sensitivity.busy.visible
+    assert list(dash.sensitivity.table.object.columns) == list(HEADERS)
+    assert f"fold GJ {base:.0f}" in dash.sensitivity.info.object
+    back = pd.read_csv(io.StringIO(dash.sensitivity.csv().getvalue()), comment="#")
+    assert list(back.columns) == list(TABLE_COLUMNS) and len(back) == len(r["rows"])
+    want = [row["fold_gj_nm2"] for row in r["rows"]]
+    assert back["fold_gj_nm2"].tolist() == pytest.approx([float("nan") if w is None else w for w in want],
+                                                         rel=1e-7, nan_ok=True)
+    assert dash.sensitivity.download.filename == "amra-sensitivity-rigid-cg40.csv"
+    # another case: the bands belonged to the old one and go
+    dash.controls.fidelity = "fem-torsion"
+    dash.refresh_analyses()
+    assert len(dash.map.sens_source.data["lo"]) == 0
+
+
+def test_an_invalid_case_is_named_not_studied(dash):
+    dash.controls.rotor = "uploaded file"  # nothing uploaded
+    dash.sensitivity.start()
+    assert dash.messages and "cannot study the sensitivity of this case" in dash.messages[-1][1]
+    assert dash.sensitivity.result is None and not dash.sensitivity.busy.visible
