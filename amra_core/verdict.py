@@ -118,19 +118,12 @@ def _deviation(h: np.ndarray, cols: dict, axial: bool, omega_ref: float, ref_row
 
 
 def _envelope_fit(t, e, window):
-    ok = np.isfinite(e)
-    t, e = t[ok], e[ok]
-    if len(t) < 4:
+    """(growth rate [1/s] fitted after the first third, last and first envelope values) of ``e``, or
+    Nones with fewer than 3 windows."""
+    ser = _envelope_series(t, e, window)
+    if ser is None:
         return None, None, None
-    edges = np.arange(t[0], t[-1] + window, window)
-    tc, ec = [], []
-    for a, b in zip(edges[:-1], edges[1:]):
-        sel = (t >= a) & (t < b)
-        if sel.sum() >= 2 and e[sel].max() > 0:
-            tc.append(0.5 * (a + b)); ec.append(e[sel].max())
-    if len(tc) < 3:
-        return None, None, None
-    tc, ec = np.array(tc), np.log(np.array(ec))
+    tc, ec = ser
     n = len(tc)
     use = slice(n // 3, n)  # fit after the fast initial transients
     slope = np.polyfit(tc[use], ec[use], 1)[0]

@@ -34,6 +34,19 @@ def server_settings(tmp_path):
     return ServerSettings(store_path=tmp_path / "cells.sqlite", map_workers=1, max_run_s=30.0)
 
 
+@pytest.fixture
+def dash(server_settings, analysis_pool):
+    """A dashboard without a server (its pool: the session's analysis process), with a small map."""
+    from app.app import Dashboard
+    from app.server.map_jobs import MapRegistry
+    reg = MapRegistry(server_settings)
+    d = Dashboard(server_settings, registry=reg, pool=analysis_pool)
+    d.controls.param.update(map_columns=2, map_coarse=3)
+    yield d
+    d.close()
+    reg.close()
+
+
 def wait_until(predicate, timeout_s=30.0, every_s=0.02, what="condition"):
     deadline = time.monotonic() + timeout_s
     while not predicate():

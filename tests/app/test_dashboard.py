@@ -6,19 +6,7 @@ import numpy as np
 import pytest
 
 from amra_core.simulation import HISTORY_COLUMNS
-from app.app import Dashboard
 from app.presets import PRESETS
-from app.server.map_jobs import MapRegistry
-
-
-@pytest.fixture
-def dash(server_settings, analysis_pool):
-    reg = MapRegistry(server_settings)
-    d = Dashboard(server_settings, registry=reg, pool=analysis_pool)
-    d.controls.param.update(map_columns=2, map_coarse=3)
-    yield d
-    d.close()
-    reg.close()
 
 
 def pump_until(d, pred, wait, timeout_s=60, what="condition"):

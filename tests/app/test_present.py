@@ -7,7 +7,6 @@ import holoviews as hv
 from app.live import NORMAL_HEIGHT, PRESENT_HEIGHT
 from app.url_sync import apply_query
 
-from test_dashboard import dash  # noqa: F401 - the dashboard fixture
 
 
 def test_the_toggle_switches_the_page(dash):

@@ -13,7 +13,7 @@ from app import compute
 from app.app import Dashboard
 from app.views.rotor import naca0012, side_view, tip_section
 
-from test_dashboard import dash, pump_until  # noqa: F401 - the dashboard fixture
+from test_dashboard import pump_until
 
 
 def test_drawing_geometry():

@@ -9,33 +9,15 @@ import pandas as pd
 import pytest
 
 from amra_core.sensitivity import ESTIMATE_NAMES
-from app.app import Dashboard
-from app.server.map_jobs import MapRegistry
 from app.views.sensitivity import HEADERS, TABLE_COLUMNS
-
-
-@pytest.fixture
-def dash(server_settings, analysis_pool):
-    reg = MapRegistry(server_settings)
-    d = Dashboard(server_settings, registry=reg, pool=analysis_pool)
-    d.controls.param.update(map_columns=2, map_coarse=3)
-    yield d
-    d.close()
-    reg.close()
-
-
-def _pump_until(d, pred, wait, timeout_s, what):
-    def step():
-        d.pump()
-        return pred()
-    wait(step, timeout_s, what=what)
+from test_dashboard import pump_until
 
 
 def test_sensitivity_study_draws_bands_and_exports_its_table(dash, wait):
     dash.refresh_analyses()  # the map follows the case
     dash.sensitivity.start()
     assert dash.sensitivity.busy.visible and "computing" in dash.sensitivity.info.object
-    _pump_until(dash, lambda: dash.sensitivity.result is not None, wait, 900, "the sensitivity study")
+    pump_until(dash, lambda: dash.sensitivity.result is not None, wait, 900, "the sensitivity study")
     r = dash.sensitivity.result
     assert r["cg"] == pytest.approx(0.40) and r["fidelity"] == "rigid" and r["step"] == pytest.approx(0.10)
     assert len(r["rows"]) == 2 * len(ESTIMATE_NAMES)
