@@ -28,9 +28,7 @@ import threading
 import warnings
 
 from ..boundary.intervals import WEAK_AMPLITUDE_DEG, WEAK_DAMPING
-from ..flight import AERO_MODELS
-from ..shapes import FIDELITIES
-from .common import dumps_strict, number, rigid_spring_arg, value_range
+from .common import column_case_args, dumps_strict, number, value_range
 
 
 def register(sub) -> None:
@@ -39,14 +37,7 @@ def register(sub) -> None:
                        description="Stability boundary map over CG x GJ: each CG column is walked down its trim "
                                    "branch by continuation from --gj's upper end, with every stability change "
                                    "and the fold bracketed to --tol.")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--preset", help="shipped rotor preset (default paper-boundary)")
-    g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
-    p.add_argument("--fidelity", choices=FIDELITIES, default="rigid")
-    rigid_spring_arg(p)
-    p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
-    p.add_argument("--mu", type=number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
-    p.add_argument("--ea", type=number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
+    column_case_args(p)
     p.add_argument("--cg", type=value_range("--cg", 0.0, 1.0, True), default=(0.20, 0.50, 16),
                    help="CG columns A:B:N [chord fraction] (default 0.20:0.50:16)")
     p.add_argument("--gj", type=value_range("--gj", 1.0, 1e6, False), default=(30.0, 3000.0),

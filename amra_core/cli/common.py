@@ -10,7 +10,7 @@ import math
 import os
 import stat
 
-from ..flight import FlightCondition
+from ..flight import AERO_MODELS, FlightCondition
 from ..shapes import FIDELITIES, TORSION_SPRINGS
 
 
@@ -55,6 +55,19 @@ def rigid_spring_arg(p):
     """``--rigid-spring frequency|static`` (:attr:`amra_core.flight.SolverSettings.rigid_spring`)."""
     p.add_argument("--rigid-spring", choices=TORSION_SPRINGS, default="frequency",
                    help="the rigid level's root torsion spring: frequency ((pi/2)^2 GJ/L, the cantilever's first torsion frequency; default) or static (the same load-weighted twist under an r^2 moment, about 1.6x softer)")
+
+
+def column_case_args(p):
+    """The arguments a map column's case shares (``amra boundary``, ``amra sensitivity``): the rotor
+    (``--preset`` or ``--rotor``), ``--fidelity``, ``--rigid-spring``, ``--aero``, ``--mu``, ``--ea``."""
+    g = p.add_mutually_exclusive_group()
+    g.add_argument("--preset", help="shipped rotor preset (default paper-boundary)")
+    g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
+    p.add_argument("--fidelity", choices=FIDELITIES, default="rigid")
+    rigid_spring_arg(p)
+    p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
+    p.add_argument("--mu", type=number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
+    p.add_argument("--ea", type=number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
 
 
 def load_rotor(args):

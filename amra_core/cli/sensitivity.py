@@ -8,9 +8,8 @@ from __future__ import annotations
 import math
 import sys
 
-from ..flight import AERO_MODELS, SolverSettings
-from ..shapes import FIDELITIES
-from .common import dumps_strict, number, rigid_spring_arg, value_range
+from ..flight import SolverSettings
+from .common import column_case_args, dumps_strict, number, value_range
 
 
 def _fmt(v):
@@ -79,14 +78,7 @@ def register(sub) -> None:
                        description="For each estimated rotor value (" + ", ".join(ESTIMATE_NAMES) + ") the CG "
                                    "column is walked again (the map's column walk) with the value changed by "
                                    "-STEP and +STEP; prints the fold GJ and flutter GJ and their changes.")
-    g = p.add_mutually_exclusive_group()
-    g.add_argument("--preset", help="shipped rotor preset (default paper-boundary)")
-    g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
-    p.add_argument("--fidelity", choices=FIDELITIES, default="rigid")
-    rigid_spring_arg(p)
-    p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
-    p.add_argument("--mu", type=number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
-    p.add_argument("--ea", type=number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
+    column_case_args(p)
     p.add_argument("--cg", type=number("--cg", 0.0, 1.0), default=0.40, help="CG column [chord fraction]")
     p.add_argument("--step", type=number("--step", 0.001, 0.49), default=0.10,
                    help="relative change of each estimate (default 0.10: +-10 %%)")
