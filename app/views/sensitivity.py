@@ -48,6 +48,17 @@ def sensitivity_frame(result: dict) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=list(TABLE_COLUMNS))
 
 
+def display_frame(result: dict) -> pd.DataFrame:
+    """The table as the page shows it: numbers to 4 significant digits, a missing boundary said in
+    words, a missing change as a dash."""
+    def delta(d):
+        return "–" if d is None else f"{d:+.0f}"
+    rows = [(r["label"], f"{100.0 * r['change']:+.0f}", f"{r['value']:.4g}", r["unit"], _gj(r["fold_gj_nm2"]),
+             delta(r["d_fold_gj_nm2"]), _gj(r["flutter_gj_nm2"]), delta(r["d_flutter_gj_nm2"]), r["note"] or "")
+            for r in result["rows"]]
+    return pd.DataFrame(rows, columns=list(HEADERS))
+
+
 def summary_html(result: dict) -> str:
     b = result["baseline"]
     flutter = math.inf if b["flutter_at_gj_max"] else b["flutter_gj_nm2"]
@@ -74,8 +85,7 @@ class SensitivityView(pn.viewable.Viewer):
         self.info = Text("Which conclusions rest on estimates? The button walks this CG column again with each "
                          "estimated rotor value 10 % lower and 10 % higher.", name="sensitivity-info",
                          css_class="amra-sensitivity-info")
-        self.table = pn.pane.DataFrame(None, index=False, float_format="{:.4g}".format, sizing_mode="stretch_width",
-                                       name="sensitivity-table")
+        self.table = pn.pane.DataFrame(None, index=False, sizing_mode="stretch_width", name="sensitivity-table")
         self.download = pn.widgets.FileDownload(callback=self.csv, filename="amra-sensitivity.csv",
                                                 label="Sensitivity table (CSV)", disabled=True,
                                                 css_classes=["amra-export-sensitivity"], sizing_mode="stretch_width")
@@ -97,9 +107,7 @@ class SensitivityView(pn.viewable.Viewer):
     def show(self, result: dict) -> None:
         self.result = result
         self.busy.visible = self.busy.active = False
-        frame = sensitivity_frame(result)
-        frame.columns = list(HEADERS)
-        self.table.object = frame
+        self.table.object = display_frame(result)
         self.info.object = summary_html(result)
         self.download.disabled = False
         self.download.filename = f"amra-sensitivity-{result['fidelity']}-cg{100 * result['cg']:.0f}.csv"

@@ -29,7 +29,10 @@ def test_sensitivity_study_draws_bands_and_exports_its_table(dash, wait):
     fold_at = list(bands["lo"]).index(lo)
     assert bands["hi"][fold_at] == hi and bands["cg_pct"][fold_at] == pytest.approx(40.0 - 0.6)
     assert "fold GJ" in bands["text"][fold_at] and not dash.sensitivity.busy.visible
-    assert list(dash.sensitivity.table.object.columns) == list(HEADERS)
+    shown = dash.sensitivity.table.object
+    assert list(shown.columns) == list(HEADERS)
+    assert not shown.isin(["None", "nan", "NaN"]).any().any()  # a missing value is said, not printed as None
+    assert (shown["Fold GJ [N m²/rad]"] == [f"{w:.0f}" for w in (row["fold_gj_nm2"] for row in r["rows"])]).all()
     assert f"fold GJ {base:.0f}" in dash.sensitivity.info.object
     back = pd.read_csv(io.StringIO(dash.sensitivity.csv().getvalue()), comment="#")
     assert list(back.columns) == list(TABLE_COLUMNS) and len(back) == len(r["rows"])
