@@ -302,20 +302,25 @@ def _answer_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row,
     collapsed below 50 % of trim (the paper's question answered), or (b) the perturbation grew for
     seconds (an instability's growth fitted over whole revolutions, ``flutter`` or ``divergence``,
     above :data:`GROWTH_THRESHOLD_PER_S`): the motion ran away until the state left the model's
-    range. A time step outside its stability region blows up within a few steps, too fast for an
-    envelope fitted over revolutions, so it is still told as ``numerical-failure``. None otherwise."""
+    range. Both are read from the rows up to one envelope window (a revolution, at least 0.1 s)
+    before the failure: a time step outside its stability region blows up within a few steps, inside
+    that last window, so it is still told as ``numerical-failure``. None otherwise."""
     finite = np.isfinite(h).all(axis=1)
     n_ok = len(h) if finite.all() else int(np.argmin(finite))
     if n_ok < 2:
         return None
-    v = _judge(h[:n_ok], columns, omega_ref, axial, "finished", trimmed, ref_row, perturbation_scale,
+    t = h[:n_ok, cols["t_s"]]
+    t_fail = float(t[-1])
+    n_before = int(np.searchsorted(t, t_fail - max(2 * math.pi / omega_ref, 0.1), side="right"))
+    if n_before < 2:
+        return None
+    v = _judge(h[:n_before], columns, omega_ref, axial, "finished", trimmed, ref_row, perturbation_scale,
                hover_induced_m_s, branch)
-    collapsed = bool((h[:n_ok, cols["omega_rad_s"]] < 0.5 * omega_ref).any())
+    collapsed = bool((h[:n_before, cols["omega_rad_s"]] < 0.5 * omega_ref).any())
     grew = v.verdict in ("flutter", "divergence") and v.growth_rate_per_s is not None \
         and v.growth_rate_per_s > GROWTH_THRESHOLD_PER_S
     if v.verdict in ("undetermined", "numerical-failure") or not (collapsed or grew):
         return None
-    t_fail = float(h[n_ok - 1, cols["t_s"]])
     if grew and not collapsed:
         v.outcome = "runaway"
         v.explanation += (f"; it grew until the state left the model's range: the integration stopped at "
