@@ -111,6 +111,7 @@ class Fan:
 class Ladder:
     result: dict  #: app.compute.run_ladder
 
+
 @dataclass(frozen=True)
 class Sensitivity:
     """The boundaries' sensitivity to every estimate at one CG column

@@ -8,7 +8,6 @@ from app.live import NORMAL_HEIGHT, PRESENT_HEIGHT
 from app.url_sync import apply_query
 
 
-
 def test_the_toggle_switches_the_page(dash):
     hv.extension("bokeh")
     page = dash.__panel__()  # builds the header and the main area
