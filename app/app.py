@@ -343,7 +343,7 @@ class Dashboard(pn.viewable.Viewer):
                    description=None),
             button(c.param.stop, button_type="warning", width=110, height=44, description=None),
             checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, **big),
-            pn.pane.Bokeh(self.status.badge.div, width=360), visible=c.present, margin=0)
+            pn.pane.Bokeh(self.status.badge.div, width=300), visible=c.present, margin=0)
         c.param.watch(lambda e: setattr(live_bar, "visible", e.new), "present")
         toggle = pn.widgets.Toggle.from_param(c.param.present, button_type="light", width=170,
                                               css_classes=["amra-present"], margin=(10, 10))

@@ -76,11 +76,12 @@ class Text(pn.viewable.Viewer):
 
 
 def badge_html(verdict, final: bool) -> str:
-    """The verdict in one line, for the header in presentation mode (on its dark background)."""
+    """The verdict for the header in presentation mode (on its dark background): the verdict word, and
+    the rotor-speed collapse on a second line (one line overflowed a 1280 px projector's header)."""
     if verdict is None:
         return "<span style='color:#eceff1;font-size:20px'>no run yet</span>"
     colour = {"stable": "#a5d6a7"}.get(verdict.verdict, "#ffab91")
-    collapse = f" · Ω collapsed at {verdict.collapse_time_s:.1f} s" if verdict.collapse_time_s is not None else ""
+    collapse = f"<br>Ω collapsed at {verdict.collapse_time_s:.1f} s" if verdict.collapse_time_s is not None else ""
     return (f"<span style='color:{colour};font-size:22px;font-weight:bold'>{html.escape(verdict.verdict)}</span>"
             f"<span style='color:#eceff1;font-size:16px'> ({'final' if final else 'so far'}){collapse}</span>")
 

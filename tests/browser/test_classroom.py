@@ -59,7 +59,11 @@ def test_presentation_mode_fits_a_projector(watched_page, dashboard_server):
     expect(gj).to_have_value("100")
     run.click()
     wait_for(lambda: streamed(page)[0] > 0, 180, what="the run in presentation mode")
-    page.wait_for_timeout(3000)
+    collapse = page.locator(".amra-badge").get_by_text("Ω collapsed at").first
+    expect(collapse).to_be_visible(timeout=180_000)  # fig10 loses its rotor speed at ~3.4 s
+    for part in (collapse, page.locator(".amra-badge").get_by_text("(final)").first):
+        box = part.bounding_box()
+        assert box["x"] + box["width"] <= 1280, box  # the verdict fits the projector's header
     shot(page, "c02-presentation-1280x720")
 
 
