@@ -1,4 +1,5 @@
 """Jitted section-coefficient lookup (the kernel half of :mod:`amra_core.airfoil`).
+Compiled under the floating-point policy of :mod:`amra_core.jit` (fast math without ``reassoc``).
 
 Kept apart from the table loading and resampling (which use SciPy and files) so the jitted core
 imports only jitted code: :mod:`amra_core.kernels` calls :func:`airfoil_coefficients` on the

@@ -16,7 +16,8 @@ import math
 import numpy as np
 
 from .airfoil_kernel import airfoil_coefficients
-from .jit import inline_kernel, kernel
+from .atan2_kernel import atan2
+from .jit import exact_kernel, inline_kernel, kernel
 from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
@@ -102,7 +103,7 @@ def station_aero(ut, up, theta, thd, c, xea, xac, a, x1, x2, theo, rho, a_sound,
         wn, d1, d2 = wagner(wn, v, c, x1, x2)
     else:
         d1 = 0.0; d2 = 0.0
-    aeff = math.atan2(wn, uc)
+    aeff = atan2(wn, uc)
     inv = 1.0 / (math.sqrt(wn * wn + uc * uc) + 1e-12)
     cos_a = uc * inv; sin_a = wn * inv
     cl, cd, cm = airfoil_coefficients(aeff, v / a_sound, af0, daf, cl_t, cd_t, cm_t)
@@ -464,7 +465,7 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     return done, rows, status
 
 
-@kernel
+@exact_kernel
 def jacobian(y0, m, J):
     """``J`` (n - 1, n - 1) = df/dy without the azimuth row and column, by central differences with
     the relative step 1e-6 (the same arithmetic as n - 1 pairs of :func:`evaluate`, in one call)."""

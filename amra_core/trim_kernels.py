@@ -1,4 +1,5 @@
 """Jitted Newton iteration for the steady axial trim (issue 8 §5).
+Compiled under the floating-point policy of :mod:`amra_core.jit` (fast math without ``reassoc``).
 
 The axial trim solves ``f(z) = 0`` for the unknowns ``z = y[iu]`` (rotor speed unless held, descent
 rate, inflow, lag and the static structural coordinates) with residuals ``dy[ir]`` of the full
