@@ -290,9 +290,21 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
     return y, avg, hist[:rows]
 
 
-def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional[float] = None,
-                 guess: Optional[TrimResult] = None) -> TrimResult:
-    """Periodic trim in forward flight at horizontal airspeed ``airspeed_m_s``."""
+#: a forward trim's Newton iteration stops when this many iterations did not halve its best residual
+#: while that is still above STALL_FAR: on a branch that has ended it cycles (residuals 0.45, 0.54,
+#: 0.45, ...) and 30 iterations cost 100+ revolutions per failed continuation step. Near the
+#: acceptance level (1e-3) it is left to run: there the revolution averages of a lightly damped
+#: blade fluctuate about 1e-3 and a later iterate often falls below it.
+STALL_ITERATIONS = 8
+STALL_FAR = 1e-2
+
+
+def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold: Optional[float] = None,
+                 guess: Optional[TrimResult] = None, mu: Optional[float] = None) -> TrimResult:
+    """Periodic trim in forward flight at horizontal airspeed ``airspeed_m_s`` [m/s], or, with
+    ``mu`` given (and ``airspeed_m_s`` None), at the advance ratio ``mu``: the airspeed then follows
+    the unknowns, ``V = mu Omega R / cos(tilt)``, inside the one Newton iteration (a fixed point
+    on the airspeed around whole trims cost two to three trims per advance ratio)."""
     H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
     weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
     base = trim_axial(model) if guess is None else guess
@@ -307,11 +319,16 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
     dt = stable_time_step(model, omega)
     free = ["tilt"] if omega_hold else ["omega", "vd", "tilt"]
 
+    def speed(vals) -> float:
+        if mu is None:
+            return airspeed_m_s
+        return mu * vals["omega"] * model.rotor.radius_m / math.cos(vals["tilt"])
+
     def evaluate(z, n_revs):
         nonlocal y
         vals = dict(omega=omega, vd=vd, tilt=tilt)
         vals.update(dict(zip(free, z)))
-        m = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=airspeed_m_s, hold_omega=True, hold_vd=True)
+        m = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=speed(vals), hold_omega=True, hold_vd=True)
         y[Y_OMEGA] = vals["omega"]; y[Y_VD] = vals["vd"]
         y, avg, last = _march_revs(m, y, n_revs, dt)
         res = [avg[H["vertical_force_n"]] / weight - 1.0]
@@ -322,17 +339,28 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
     z = np.array([dict(omega=omega, vd=vd, tilt=tilt)[k] for k in free])
     res, avg, last, m = evaluate(z, 12)
     steps = np.array([dict(omega=0.2, vd=0.1, tilt=math.radians(0.2))[k] for k in free])
+    J, last_norm, norms = None, math.inf, []
     for it in range(30):
-        if np.max(np.abs(res)) < 2e-4:
+        norm = np.max(np.abs(res))
+        norms.append(norm)
+        if norm < 2e-4:
             break
-        J = np.zeros((len(z), len(z)))
-        y_keep = y.copy()
-        for k in range(len(z)):
-            zp = z.copy(); zp[k] += steps[k]
-            y = y_keep.copy()
-            rp, _, _, _ = evaluate(zp, 3)
-            J[:, k] = (rp - res) / steps[k]
-        y = y_keep
+        if (it >= STALL_ITERATIONS + 4 and min(norms) > STALL_FAR
+                and min(norms[-STALL_ITERATIONS:]) > 0.5 * min(norms[:-STALL_ITERATIONS])):
+            break  # stagnation far from a trim: no halving of the best residual lately (it cycles)
+        # chord Newton: the difference Jacobian (one march per unknown) is formed again only when
+        # the last step did not halve the residual; a good one is reused, so an iteration that
+        # converges costs one march instead of one plus one per unknown
+        if J is None or norm > 0.5 * last_norm:
+            J = np.zeros((len(z), len(z)))
+            y_keep = y.copy()
+            for k in range(len(z)):
+                zp = z.copy(); zp[k] += steps[k]
+                y = y_keep.copy()
+                rp, _, _, _ = evaluate(zp, 3)
+                J[:, k] = (rp - res) / steps[k]
+            y = y_keep
+        last_norm = norm
         try:
             dz = -np.linalg.solve(J, res)
         except np.linalg.LinAlgError:
@@ -347,14 +375,14 @@ def trim_forward(model: CompiledModel, airspeed_m_s: float, omega_hold: Optional
         if guess is None or guess.status != "retry":
             retry = TrimResult("retry", state=base.state, disk_tilt_rad=math.radians(20.0), omega_rad_s=omega_hold,
                                model=model)
-            return trim_forward(model, airspeed_m_s, omega_hold, retry)
-        return _max_thrust_level(model, airspeed_m_s, omega_hold, base.state, dt)
+            return trim_forward(model, airspeed_m_s, omega_hold, retry, mu)
+        return _max_thrust_level(model, speed(vals), omega_hold, base.state, dt)
     if not ok:
         return TrimResult("no-autorotation", reason=f"forward-flight trim did not converge (residuals {np.round(res, 4).tolist()})",
                           model=model)
-    final = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=airspeed_m_s,
+    final = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=speed(vals),
                                 hold_omega=omega_hold is not None, hold_vd=omega_hold is not None)
-    return TrimResult("trimmed", y.copy(), vals["omega"], vals["vd"], vals["tilt"], airspeed_m_s,
+    return TrimResult("trimmed", y.copy(), vals["omega"], vals["vd"], vals["tilt"], speed(vals),
                       float(y[Y_V0]), float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]),
                       _teeter_amplitude(last), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final)
 
@@ -380,20 +408,7 @@ def _solve_forward_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -
     fl = model.flight
     if fl.mu is None:
         return trim_forward(model, fl.airspeed_m_s, hold, guess)
-    # advance ratio given: fixed point on the airspeed V = mu Omega R / cos(tilt)
-    res = guess if guess is not None else trim_axial(model, omega_hold=hold)
-    if not res.ok:
-        return res
-    omega = res.omega_rad_s
-    tilt = res.disk_tilt_rad if guess is not None else math.radians(8.0)
-    g = guess
-    for _ in range(10):
-        v = fl.mu * omega * model.rotor.radius_m / math.cos(tilt)
-        res = trim_forward(model, v, hold, g)
-        if not res.ok or abs(res.mu - fl.mu) < 1e-4:
-            return res
-        omega, tilt, g = res.omega_rad_s, res.disk_tilt_rad, res
-    return res
+    return trim_forward(model, None, hold, guess, mu=fl.mu)
 
 
 #: forward trims are cold-started (from the axial trim, shaft tilt 8 deg, half the axial descent

@@ -23,6 +23,13 @@ from .equilibrium import (FORWARD_COLD_START_MU, FORWARD_MIN_STEP_MU, FORWARD_ST
 from .model import CompiledModel
 
 
+#: Mean GJ [N m^2/rad] above which the trim's stiff start gains nothing: 30x the top of the boundary
+#: map's GJ range (3000), where the elastic twist is 1/60 of the nominal McCutcheon blade's (GJ 1478).
+#: A stiffer start only shortens the explicit time step of the forward-flight marching (at GJ 3e7 the
+#: torsion mode sets 50 us: a rigid GJ 1e6 trim at mu 0.5 took 7 s, 6.6 s of it at the start).
+STIFF_START_GJ_NM2 = 9.0e4
+
+
 def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int = 8,
          stiff_factor: float = 30.0, rel_tol: float = 0.02) -> TrimResult:
     """Trim for the model's flight condition, following the trim branch by continuation in GJ
@@ -34,11 +41,13 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
     result is ``no-autorotation`` with ``branch_end`` (GJ scale, mean GJ, rotor speed, descent rate
     and tip twist of the last trimmed point, and a windmill-brake equilibrium at the requested GJ
     if one exists) and that point's state and model in ``state``/``model``, from which a simulation
-    can start (model-notes §7)."""
+    can start (model-notes §7). The stiff start is never stiffer than STIFF_START_GJ_NM2 (mean GJ)
+    unless the blade itself is: a blade of GJ 1e6 starts at its own GJ, not at 3e7."""
     hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
     if hold is not None and not model.flight.is_axial:
         return _solve_at(model, hold, None)  # rotor speed held (Table 1): no autorotation branch to follow
-    m_stiff = _with_gj_scale(model, stiff_factor)
+    stiff_factor = min(stiff_factor, max(1.0, STIFF_START_GJ_NM2 / gj_mean_of(model)))
+    m_stiff = model if stiff_factor <= 1.0 else _with_gj_scale(model, stiff_factor)
     try:
         first = _solve_at(m_stiff, hold, None)
     except FloatingPointError as exc:
