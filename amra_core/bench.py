@@ -19,7 +19,9 @@ import subprocess
 import sys
 import time
 
-TARGETS_X_REALTIME = {"rigid": 300.0, "fem-torsion": 50.0, "fem-coupled": 10.0}
+#: issue 24's targets (rigid 1000x, fem-coupled 300x); fem-torsion has none of its own there: the
+#: earlier 50x stays
+TARGETS_X_REALTIME = {"rigid": 1000.0, "fem-torsion": 50.0, "fem-coupled": 300.0}
 ACCURACY_SPAN_S = 5.0  #: simulated time [s] of the accuracy comparison
 REFERENCE_STEP_DIVISOR = 8  #: the reference run's step is the default step divided by this
 #: largest tip-twist error allowed, as a fraction of the reference run's largest tip-twist excursion
