@@ -210,16 +210,20 @@ class Server:
                                      stderr=subprocess.STDOUT, start_new_session=True)
         self.url = f"http://127.0.0.1:{self.port}/main"
         deadline = time.monotonic() + 180
-        while True:
-            if self.proc.poll() is not None:
-                raise RuntimeError(f"amra serve exited: {Path(self.dir, 'serve.log').read_text()[-2000:]}")
-            try:
-                with urllib.request.urlopen(f"http://127.0.0.1:{self.port}/liveness", timeout=5):
-                    break
-            except OSError:
-                if time.monotonic() > deadline:
-                    raise TimeoutError("amra serve did not answer within 180 s")
-                time.sleep(0.5)
+        try:
+            while True:
+                if self.proc.poll() is not None:
+                    raise RuntimeError(f"amra serve exited: {Path(self.dir, 'serve.log').read_text()[-2000:]}")
+                try:
+                    with urllib.request.urlopen(f"http://127.0.0.1:{self.port}/liveness", timeout=5):
+                        break
+                except OSError:
+                    if time.monotonic() > deadline:
+                        raise TimeoutError("amra serve did not answer within 180 s")
+                    time.sleep(0.5)
+        except BaseException:  # not started, or the script stopped meanwhile (SIGTERM): no orphan server
+            self.stop()
+            raise
 
     def rss_mb(self) -> float:
         """The whole tree: the server and its map worker processes [MB]."""
