@@ -92,6 +92,7 @@ class Session:
                 handler(pose)
 
     def _dispatch_rows(self, rows: list) -> None:
+        rows = [r for r in rows if len(r.rows)]  # a chunk shorter than the output step has none
         if not rows:
             return
         ev = rows[0] if len(rows) == 1 else Rows(rows[-1].run_id, np.concatenate([r.rows for r in rows]),

@@ -123,3 +123,19 @@ def test_the_trim_runs_in_the_run_pool(wait, analysis_pool):
     s.start(_case(run_s=0.5), speed=10.0)
     run_until(s, lambda: rec.of(Finished), wait, 120, what="the run")
     assert rec.of(Finished)[0].status == "completed" and s.sim is not None
+
+
+def test_an_empty_batch_of_rows_never_reaches_the_views():
+    """A run's first batch is its history so far, which may hold no row; delivered alone (a slow
+    machine delivers between two posts) it must not reach a view as a batch without rows."""
+    s = Session()
+    rec = Recorder(s)
+    empty = np.zeros((0, len(COL)))
+    s.post(Rows(s.run_id, empty, 900.0, 0.0))
+    s.delivery.run_due()
+    s.deliver()
+    assert rec.of(Rows) == []
+    s.post(Rows(s.run_id, empty, 900.0, 0.0))
+    s.post(Rows(s.run_id, np.ones((2, len(COL))), 900.0, 0.1))
+    s.deliver()
+    assert [len(e.rows) for e in rec.of(Rows)] == [2]
