@@ -358,21 +358,30 @@ class Dashboard(pn.viewable.Viewer):
     def main(self) -> pn.Column:
         self.top = top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"),
                                 sizing_mode="stretch_width", visible=not self.controls.present)
-        live = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
+        self.controls.param.watch(lambda e: self.present(e.new), "present")
+        # the plots and the views are built after the first paint (Panel's defer_load), so the page
+        # a session waits for holds the controls only
+        return pn.Column(top, pn.panel(self.live_grid, defer_load=True, sizing_mode="stretch_width"),
+                         pn.panel(self.views, defer_load=True, sizing_mode="stretch_width"),
+                         sizing_mode="stretch_width", name="main")
+
+    def live_grid(self) -> pn.GridBox:
+        grid = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
                           sizing_mode="stretch_width")
         self.live.present(self.controls.present)
-        self.controls.param.watch(lambda e: self.present(e.new), "present")
+        return grid
+
+    def views(self) -> pn.Tabs:
+        """The analysis views, one tab each; a tab's models are built when it is first shown."""
         the_map = pn.Column(self.map, self.sensitivity, sizing_mode="stretch_width") if self.map is not None \
             else pn.pane.Markdown("map disabled")
-        tabs = pn.Tabs(("Boundary map", the_map),
-                       ("Modes & root locus", self.modes), ("Live rotor", self.rotor_view),
-                       ("Rotor disc", self.disc), ("Fan plot", self.fan),
-                       ("Fidelity ladder", self.ladder), ("Help", HelpView(self.controls)), dynamic=True,
-                       sizing_mode="stretch_width", name="views")
-        # the plots are rendered after the first paint (Panel's defer_load)
-        return pn.Column(top, pn.panel(lambda: live, defer_load=True, sizing_mode="stretch_width"),
-                         pn.panel(lambda: tabs, defer_load=True, sizing_mode="stretch_width"),
-                         sizing_mode="stretch_width", name="main")
+        def lazy(view):  # evaluated when the tab is first shown
+            return pn.param.ParamFunction(lambda: view, lazy=True, sizing_mode="stretch_width")
+        return pn.Tabs(("Boundary map", the_map),
+                       ("Modes & root locus", lazy(self.modes)), ("Live rotor", lazy(self.rotor_view)),
+                       ("Rotor disc", lazy(self.disc)), ("Fan plot", lazy(self.fan)),
+                       ("Fidelity ladder", lazy(self.ladder)), ("Help", lazy(HelpView(self.controls))),
+                       dynamic=True, sizing_mode="stretch_width", name="views")
 
     def __panel__(self):
         # one root per template area (each root added to a document makes Bokeh recompute its

@@ -67,6 +67,19 @@ class RotorDrawing:
         self.blades = [ColumnDataSource({"x": [], "y": []}) for _ in range(2)]
         self.hub = ColumnDataSource({"x": [], "y": []})
         self.sections = [ColumnDataSource({"x": [], "y": []}) for _ in range(2)]
+        self._look = (radius_m, title, scales)
+        self._figures = None
+
+    @property
+    def figures(self) -> tuple:
+        """The side view and the tip sections, built when first shown."""
+        if self._figures is None:
+            self._figures = self._build()
+        return self._figures
+
+    def _build(self) -> tuple:
+        radius_m, title, scales = self._look
+        chord_m, flap_scale, twist_scale = self.chord_m, self.flap_scale, self.twist_scale
         reach = 1.05 * radius_m
         flap_note, twist_note = scales or (f"×{flap_scale:g}", f"×{twist_scale:g}")
         side = figure(title=f"{title}Side view: flap and teeter {flap_note}", height=260,
@@ -87,7 +100,7 @@ class RotorDrawing:
             tips.patch("x", "y", source=src, fill_alpha=0.25, color=colour, line_width=2, legend_label=f"blade {b}")
         tips.legend.location = "top_left"
         tips.toolbar.logo = None
-        self.figures = (side, tips)
+        return side, tips
 
     def draw(self, r_m, flap_m, twist_rad, teeter_rad: float) -> None:
         lines = side_view(r_m, flap_m, teeter_rad, self.flap_scale)

@@ -266,3 +266,20 @@ def test_an_uploaded_rotor_says_its_own_values_are_overridden(dash):
     level, text = dash.messages[-1]
     assert level == "info" and "Its own GJ 1471 N m²/rad, EA 31.4 % and CG 33.0 % chord" in text
     assert "overridden by the controls' uniform GJ, EA and CG" in text
+
+
+def test_a_hidden_tab_builds_its_figures_only_when_it_is_shown(dash):
+    """Page build holds the controls; the plots come after the first paint, and a view's figures are
+    built when its tab is first shown (issue 22: page build <= 0.3 s server time)."""
+    import holoviews as hv
+    from bokeh.document import Document
+    hv.extension("bokeh", logo=False)
+    page = dash.__panel__()
+    doc = page.server_doc(Document())
+    assert dash.rotor_view.drawing._figures is None  # (defer_load waits for a served page's load only)
+    tabs = dash.views()
+    tabs.get_root(doc)
+    assert dash.rotor_view.drawing._figures is None  # the first tab (the map) is shown, not the rotor
+    tabs.active = 2  # "Live rotor"
+    side, tips = dash.rotor_view.drawing._figures
+    assert side.title.text.startswith("Live rotor.") and tips.title.text.startswith("Tip sections")
