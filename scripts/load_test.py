@@ -166,13 +166,15 @@ def _tree(pid: int) -> list:
 
 
 def tree_cpu_s(pid: int) -> float:
-    """CPU time [s] used so far by ``pid`` and its descendants."""
+    """CPU time [s] used so far by ``pid`` and its descendants, those that have exited included
+    (a process's reaped children count in its cutime/cstime: without them, a pool process ending
+    inside the window took its CPU time out of the sum)."""
     total = 0
     for p in _tree(pid):
         try:
             with open(f"/proc/{p}/stat") as f:
                 fields = f.read().rsplit(")", 1)[1].split()
-            total += int(fields[11]) + int(fields[12])
+            total += int(fields[11]) + int(fields[12]) + int(fields[13]) + int(fields[14])
         except (OSError, ValueError, IndexError):
             pass
     return total / os.sysconf("SC_CLK_TCK")
