@@ -87,7 +87,7 @@ def _os_reason(exc: OSError) -> str:
     return exc.strerror or str(exc)
 
 
-def inspect_store_path(path) -> tuple[str, str]:
+def inspect_store_path(path, _again: bool = True) -> tuple[str, str]:
     """Classify ``path`` without modifying anything: ``(kind, detail)`` with kind ``new`` (missing or
     empty: a store can be created), ``amra`` (an AMRA store; detail: schema version), or raise
     :class:`StoreError` naming the path and why it cannot be used."""
@@ -97,9 +97,15 @@ def inspect_store_path(path) -> tuple[str, str]:
     try:
         st = os.stat(p)
     except FileNotFoundError:
-        if os.path.lexists(p):
+        if os.path.islink(p):
+            try:
+                target = os.readlink(p)
+            except OSError:
+                target = "?"
             raise StoreError(f"--store {p!r} is not allowed: a dangling symbolic link "
-                             f"(it points to {os.readlink(p)!r}, which does not exist)") from None
+                             f"(it points to {target!r}, which does not exist)") from None
+        if _again and os.path.lexists(p):  # another process created the store just now: look again
+            return inspect_store_path(path, _again=False)
         parent = os.path.dirname(os.path.abspath(p))
         try:
             pst = os.stat(parent)

@@ -366,3 +366,23 @@ def test_full_default_map_repeated_from_store(tmp_path):
     print(f"16-column map: {first.cases} cells in {first.wall_time_s:.2f} s; from the store in {wall:.3f} s")
     assert again.cached_cases == again.cases == first.cases and again.computed_cases == 0
     assert again.to_dict()["critical_gj"] == first.to_dict()["critical_gj"]
+
+
+def test_a_store_created_by_another_process_while_it_is_inspected_is_not_a_dangling_link(tmp_path, monkeypatch):
+    """Four writers open one new store at once: one stat()s before the file exists, another creates it,
+    and the first must look again, not call the new file a dangling symbolic link (seen in CI:
+    readlink of a regular file raised in test_several_processes_writing_at_once_lose_nothing)."""
+    import os
+    from amra_core import store
+    path = tmp_path / "race.sqlite"
+    CellStore(path, solver="w").close()
+    real_stat, calls = os.stat, []
+
+    def stat_before_creation(p, *a, **kw):
+        calls.append(p)
+        if len(calls) == 1:
+            raise FileNotFoundError(2, "No such file or directory", p)  # the file appeared just after this
+        return real_stat(p, *a, **kw)
+    monkeypatch.setattr(store.os, "stat", stat_before_creation)
+    kind, _ = store.inspect_store_path(path)
+    assert kind == "amra" and len(calls) >= 2
