@@ -8,6 +8,7 @@ the windmill-brake root, a separate equilibrium with 2-4 times the descent rate 
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import Optional
 
 import numpy as np
@@ -37,6 +38,20 @@ def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: Com
     y = y1 + s * (y1 - y0)
     y[Y_PSI] = y1[Y_PSI]
     return y
+
+
+def _forward_prediction(prev: TrimResult, prev2: TrimResult, s: float, target: CompiledModel) -> TrimResult:
+    """The secant prediction of a forward-flight trim on ``target``: state, rotor speed, descent
+    rate and shaft tilt extrapolated as :func:`predict` does. (Started from ``prev`` itself, the
+    Newton iteration had the whole step's change to close; where the branch bends, as the rigid
+    McCutcheon one at mu 0.5 near GJ 2,350 N m^2/rad, it failed, and the branch was reported as
+    ending there.)"""
+    def ahead(a: float, b: float) -> float:
+        return a + s * (a - b)
+    return replace(prev, state=predict(prev, prev2, s, target), model=target,
+                   omega_rad_s=ahead(prev.omega_rad_s, prev2.omega_rad_s),
+                   descent_rate_m_s=ahead(prev.descent_rate_m_s, prev2.descent_rate_m_s),
+                   disk_tilt_rad=ahead(prev.disk_tilt_rad, prev2.disk_tilt_rad))
 
 
 def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
@@ -81,7 +96,7 @@ def _continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[T
             if res.ok and hold is not None:
                 res.model = model.with_controls(hold_omega=True)
             return res
-        return _solve_at(model, hold, prev)
+        return _solve_at(model, hold, prev if prev2 is None else _forward_prediction(prev, prev2, s, model))
     except FloatingPointError as exc:
         return TrimResult("no-autorotation", reason=str(exc), model=model)
 

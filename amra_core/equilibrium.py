@@ -2,10 +2,10 @@
 
 * Axial flight (time-invariant): solve ``f(y) = 0`` of the full nonlinear model for rotor speed,
   descent rate, inflow, lag and the static blade deflections (thrust = weight, torque = 0).
-* Forward flight (periodic): the blade motion is converged by marching with rotor speed and
-  descent rate held, and the revolution-averaged residuals (torque, vertical and horizontal rotor
-  force of a gliding isolated rotor) are driven to zero over rotor speed, descent rate and shaft
-  tilt by a Newton iteration on those averages.
+* Forward flight (periodic): with rotor speed and descent rate held, the blade motion is shot onto
+  its periodic orbit (:mod:`amra_core.shooting`), and the revolution-averaged residuals (torque,
+  vertical and horizontal rotor force of a gliding isolated rotor) are driven to zero over rotor
+  speed, descent rate and shaft tilt by a damped Newton iteration on those averages.
 * ``omega_hold_rad_s`` (paper Table 1): rotor speed held at the given value; axial: descent rate
   for thrust = weight; forward: level flight (descent 0) with the shaft tilt for lift = weight.
 
@@ -24,6 +24,7 @@ from scipy.optimize import root
 from . import kernel_guard, kernels
 from .model import (L_THRUST, L_TORQUE, CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step,
                     transfer_state)
+from .shooting import PeriodicShooting
 
 MU_RANGE = (0.0, 0.5)
 
@@ -50,6 +51,9 @@ class TrimResult:
     #: rotor speed [rad/s] where the branch this trim was continued along started (the stiff blade);
     #: nan for a trim solved on its own (a cold start), see :func:`amra_core.continuation.continue_to`
     omega_branch_start_rad_s: float = float("nan")
+    #: forward flight: the shooting Jacobian of this trim's periodic orbit, reused by the next trim
+    #: of a continuation (:mod:`amra_core.shooting`)
+    shooting: Optional[PeriodicShooting] = field(default=None, repr=False, compare=False)
 
     @property
     def ok(self) -> bool:
@@ -297,6 +301,9 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
 #: blade fluctuate about 1e-3 and a later iterate often falls below it.
 STALL_ITERATIONS = 8
 STALL_FAR = 1e-2
+#: halvings of a Newton step that raises the residual (from a continuation step's prediction near
+#: a fold the full step overshoots, and the undamped iteration wandered off a trim that exists)
+BACKTRACKS = 3
 
 
 def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold: Optional[float] = None,
@@ -324,12 +331,21 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
             return airspeed_m_s
         return mu * vals["omega"] * model.rotor.radius_m / math.cos(vals["tilt"])
 
+    # the periodic orbit of every trial is shot for with the transition matrix of a neighbouring
+    # trim (a continuation's last one) or of this trim's start, formed again once if the Newton
+    # iteration stalls with it; a cold start marches until it stalls near the trim
+    inherited = guess is not None and guess.shooting is not None and guess.shooting.n_y == model.n_y
+    shooting = guess.shooting.copy() if inherited else PeriodicShooting()
+
     def evaluate(z, n_revs):
         nonlocal y
         vals = dict(omega=omega, vd=vd, tilt=tilt)
         vals.update(dict(zip(free, z)))
         m = model.with_controls(alpha_s_rad=vals["tilt"], airspeed_m_s=speed(vals), hold_omega=True, hold_vd=True)
         y[Y_OMEGA] = vals["omega"]; y[Y_VD] = vals["vd"]
+        if shooting.lu is not None:  # onto this trial's periodic orbit, then one revolution to average
+            y, _ = shooting.project(m, y, dt)
+            n_revs = 1
         y, avg, last = _march_revs(m, y, n_revs, dt)
         res = [avg[H["vertical_force_n"]] / weight - 1.0]
         if not omega_hold:
@@ -337,7 +353,10 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
         return np.array(res), avg, last, m
 
     z = np.array([dict(omega=omega, vd=vd, tilt=tilt)[k] for k in free])
-    res, avg, last, m = evaluate(z, 12)
+    res, avg, last, m = evaluate(z, 12 if guess is None else 4)
+    if shooting.lu is None and guess is not None:
+        shooting.build(m, y, dt)
+        res, avg, last, m = evaluate(z, 1)
     steps = np.array([dict(omega=0.2, vd=0.1, tilt=math.radians(0.2))[k] for k in free])
     J, last_norm, norms = None, math.inf, []
     for it in range(30):
@@ -351,6 +370,13 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
         # chord Newton: the difference Jacobian (one march per unknown) is formed again only when
         # the last step did not halve the residual; a good one is reused, so an iteration that
         # converges costs one march instead of one plus one per unknown
+        if norm > 0.5 * last_norm and (inherited or (shooting.lu is None and norm < STALL_FAR)):
+            # the neighbour's matrix no longer serves, or a cold start (marched: its guess is far
+            # from any orbit) stalls near the trim on the blade's slow transient
+            inherited = False
+            shooting.build(m, y, dt)
+            res, avg, last, m = evaluate(z, 1)
+            norm = np.max(np.abs(res))
         if J is None or norm > 0.5 * last_norm:
             J = np.zeros((len(z), len(z)))
             y_keep = y.copy()
@@ -367,8 +393,16 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
             break
         lim = np.array([dict(omega=5.0, vd=2.0, tilt=math.radians(2.0))[k] for k in free])
         dz = np.clip(dz, -lim, lim)
+        y_keep = y.copy()
+        trial = evaluate(z + dz, 4)
+        for _ in range(BACKTRACKS):  # a damped step: halved while it raises the residual
+            if np.max(np.abs(trial[0])) <= norm:
+                break
+            dz = dz / 2
+            y = y_keep.copy()
+            trial = evaluate(z + dz, 4)
         z = z + dz
-        res, avg, last, m = evaluate(z, 4)
+        res, avg, last, m = trial
     vals = dict(omega=omega, vd=vd, tilt=tilt); vals.update(dict(zip(free, z)))
     ok = np.max(np.abs(res)) < 1e-3 and 0.2 * omega_guess(model) < vals["omega"] < 4 * omega_guess(model)
     if not ok and omega_hold:
@@ -384,7 +418,8 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
                                 hold_omega=omega_hold is not None, hold_vd=omega_hold is not None)
     return TrimResult("trimmed", y.copy(), vals["omega"], vals["vd"], vals["tilt"], speed(vals),
                       float(y[Y_V0]), float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]),
-                      _teeter_amplitude(last), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final)
+                      _teeter_amplitude(last), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final,
+                      shooting=shooting)
 
 
 def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:

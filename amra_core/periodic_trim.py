@@ -6,7 +6,10 @@ and shaft tilt, with the blade motion converged by marching). What changes along
 the work: the march starts from the neighbour's periodic state, the advance ratio is held inside
 every evaluation (airspeed = mu Omega R / cos(tilt), no outer fixed point), and the Newton
 iteration starts from the neighbour's Jacobian and updates it by Broyden's rule, so a step costs
-tens of revolutions instead of a fresh finite-difference Jacobian per iteration.
+tens of revolutions instead of a fresh finite-difference Jacobian per iteration. Each trial's
+blade motion is shot onto its periodic orbit (:mod:`amra_core.shooting`) with a matrix the walk
+forms once and again when its GJ has moved by a quarter, so an evaluation costs two revolutions
+and its averages carry no slow transient.
 """
 from __future__ import annotations
 
@@ -17,13 +20,16 @@ import numpy as np
 
 from . import kernels
 from .model import CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step, transfer_state
-from .equilibrium import TrimResult, _march_revs, _teeter_amplitude, omega_guess
+from .equilibrium import TrimResult, _march_revs, _teeter_amplitude, gj_mean_of, omega_guess
+from .shooting import PeriodicShooting
 
 _H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
 #: residual tolerance (as trim_forward: max of the scaled residuals)
 TOL = 2e-4
 _LIM = np.array([5.0, 2.0, math.radians(2.0)])  # largest Newton update of omega, vd, tilt
 _FD = np.array([0.2, 0.1, math.radians(0.2)])  # finite-difference steps
+#: a walk's shooting matrix serves trims within this distance in log GJ of the one it was formed at
+SHOOTING_REUSE_LN_GJ = math.log(1.25)
 
 
 class PeriodicContinuation:
@@ -32,6 +38,8 @@ class PeriodicContinuation:
     def __init__(self):
         self.J: Optional[np.ndarray] = None
         self.revolutions = 0
+        self.shooting = PeriodicShooting()  #: the walk's shooting matrix (formed again far from its GJ)
+        self._shooting_gj = math.nan
 
     def _airspeed(self, model: CompiledModel, omega: float, tilt: float) -> float:
         fl = model.flight
@@ -45,6 +53,11 @@ class PeriodicContinuation:
                                 hold_omega=True, hold_vd=True)
         y[Y_OMEGA] = omega
         y[Y_VD] = vd
+        if self.shooting.lu is not None:  # onto this trial's periodic orbit, then one revolution
+            r0 = self.shooting.revolutions
+            y, _ = self.shooting.project(m, y, dt)
+            self.revolutions += self.shooting.revolutions - r0
+            n_revs = 1
         y, avg, last = _march_revs(m, y, n_revs, dt)
         self.revolutions += n_revs
         w = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
@@ -71,7 +84,19 @@ class PeriodicContinuation:
             z = z + s * (z - np.array([prev2.omega_rad_s, prev2.descent_rate_m_s, prev2.disk_tilt_rad]))
         dt = stable_time_step(model, z[0])
         try:
+            gj = gj_mean_of(model)
+            if self.shooting.lu is not None and (self.shooting.n_y != model.n_y  # modes retained changed
+                                                 or abs(math.log(gj / self._shooting_gj)) > SHOOTING_REUSE_LN_GJ):
+                self.shooting = PeriodicShooting()
             y, res, avg, last = self._evaluate(model, y, z, 6, dt)
+            if self.shooting.lu is None:
+                m = model.with_controls(alpha_s_rad=z[2], airspeed_m_s=self._airspeed(model, z[0], z[2]),
+                                        hold_omega=True, hold_vd=True)
+                r0 = self.shooting.revolutions
+                self.shooting.build(m, y, dt)
+                self.revolutions += self.shooting.revolutions - r0
+                self._shooting_gj = gj
+                y, res, avg, last = self._evaluate(model, y, z, 1, dt)
             J = self.J.copy() if self.J is not None else self._fd_jacobian(model, y, z, res, dt)
             fresh = self.J is None
             for it in range(max_iter):
