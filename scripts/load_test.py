@@ -1058,7 +1058,24 @@ def main(argv=None) -> int:
         print(json.dumps(r), flush=True)
     if a.json:
         Path(a.json).write_text(json.dumps(results, indent=2))
+    if a.server_cpus and not a.url:
+        cores = len(_cpu_set(a.server_cpus))
+        for key in ("server_p95_s", "p95_s"):
+            n = capacity(results, key)
+            found = f"{n / cores:g} (of the session counts measured)" if n else "none of the counts measured"
+            print(f"sessions per server core at {key} <= 0.5 s: {found}", flush=True)
     return 0 if all(r["errors"] == 0 for r in results) else 1
+
+
+def capacity(results: list, key: str = "server_p95_s", limit_s: float = 0.5):
+    """The largest session count measured that, with every smaller one, had no errors and ``key``
+    at most ``limit_s`` (None if none)."""
+    best = None
+    for r in sorted(results, key=lambda r: r["sessions"]):
+        if r["errors"] or r.get(key) is None or r[key] > limit_s:
+            break
+        best = r["sessions"]
+    return best
 
 
 def run_async(coro):
