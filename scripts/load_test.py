@@ -724,11 +724,13 @@ class ProtocolSession:
 
     def alert_text(self) -> str:
         """The text of a visible danger alert (Panel's Alert pane), '' if none."""
+        import html
         import re
         for m in self.doc.models:
             classes = getattr(m, "css_classes", None) or ()
             if "alert-danger" in classes and getattr(m, "visible", True):
-                text = re.sub(r"<[^>]*>", " ", getattr(m, "text", "") or "").strip()
+                # Panel sends the pane's HTML escaped
+                text = re.sub(r"<[^>]*>", " ", html.unescape(getattr(m, "text", "") or "")).strip()
                 if text:
                     return text
         return ""
@@ -833,6 +835,9 @@ async def protocol_session(url: str, arguments: dict, moves: int, timeout_s: flo
         s.follow(src)
         if run is None or slider is None:
             raise LookupError(f"no {'Run button' if run is None else 'GJ slider'} in the document")
+        text = s.alert_text()  # the page opened with a message (Run clears them)
+        if text:
+            out["errors"].append(f"alert at load: {text[:200]}")
         t_click = time.monotonic()
         s.send_event(ButtonClick(run))
         first = await s.until(lambda: s.tail(src, "t_s")[0] > 0, timeout_s)
