@@ -49,9 +49,19 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
     p = controls.param[name]
     label = p.label or name
     widget = widget_cls(value=getattr(controls, name), label=label, description=tooltip(p), **kw)
-    message = pn.pane.HTML("", css_classes=["amra-msg"], visible=False, sizing_mode="stretch_width",
-                           styles={"color": "#b71c1c", "font-size": "90%"}, margin=(0, 10, 4, 10))
-    state = {"setting": False}
+    box = pn.Column(widget, sizing_mode=kw.get("sizing_mode", "stretch_width"), margin=0)
+    state = {"setting": False, "message": None}
+
+    def show(text: str) -> None:  # the message line is made at the first bad value (page build: one model less)
+        message = state["message"]
+        if message is None and text:
+            message = state["message"] = pn.pane.HTML("", css_classes=["amra-msg"], sizing_mode="stretch_width",
+                                                      styles={"color": "#b71c1c", "font-size": "90%"},
+                                                      margin=(0, 10, 4, 10))
+            box.append(message)
+        if message is not None:
+            message.object = html.escape(text)
+            message.visible = bool(text)
 
     def typed(event):
         if state["setting"]:
@@ -62,8 +72,7 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
                 controls.param.update({name: event.new})
             except Exception as exc:  # noqa: BLE001 - what param refuses is said, not swallowed
                 bad = f"{label}: {exc}"
-        message.object = html.escape(bad)
-        message.visible = bool(bad)
+        show(bad)
 
     def follow(event):  # a preset, a link or the slider moved the value: show it, clear the message
         state["setting"] = True
@@ -71,8 +80,8 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
             widget.value = event.new
         finally:
             state["setting"] = False
-        message.visible = False
+        show("")
 
     widget.param.watch(typed, "value")
     controls.param.watch(follow, name)
-    return pn.Column(widget, message, sizing_mode=kw.get("sizing_mode", "stretch_width"), margin=0)
+    return box

@@ -256,7 +256,8 @@ def test_map_through_a_dask_cluster_beside_the_server(amra_server, chromium_args
 #: 4 updates/s, 0.003 idle), so the two cores hold about two streaming pages beside the server; with
 #: eight the pages fall minutes behind and the script's clicks time out in the browsers, not in the
 #: server (2026-12-03: 8 sessions, server_p95 0.19 s, page receipt p50 46 s). The server's capacity
-#: at 8+ sessions needs the browsers on other machines: scripts/load_test.py --server-cpus (README).
+#: at 8-32 sessions is measured with clients that render nothing (load_test.py --client protocol,
+#: tests/server/test_load.py, README "Scaling the web tier").
 CONCURRENT_SESSIONS = 2
 
 
