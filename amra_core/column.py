@@ -265,8 +265,7 @@ class _Walker:
                 if h <= self.h_min * (1 + 1e-9):  # fold: no branch a rel_tol step further
                     why = f"the trim branch ends (fold): no continuation from GJ {prev.gj_nm2:.1f} N m^2/rad"
                     if not self.axial and self._sign(prev):
-                        why += (" (forward flight: the periodic orbit there is unstable, and a trim converged by "
-                                "marching cannot follow an unstable orbit far; the branch may go on)")
+                        why += " (forward flight: the periodic orbit there is unstable)"
                     self.add(gj, None, why)
                     return prev
                 h = max(h / 2, self.h_min)

@@ -342,3 +342,16 @@ def test_time_marching_boundary_agrees_with_eigen():
           f"({100 * (g_t / g_e - 1):+.2f} %); cells/s eigen {eig.cells_per_s:.1f}, time {tim.cells_per_s:.1f}")
     assert tim.columns[0]["status"] == "bracketed"
     assert abs(g_t / g_e - 1) <= 0.05
+
+
+def test_every_module_a_map_computes_with_is_in_the_solver_fingerprint():
+    """A stored cell is keyed by the fingerprint of the solver sources: a module that changes the
+    answers but is not hashed would let a store serve cells of an older solver (shooting.py,
+    atan2_kernel.py and jit.py's fast-math flags were missing, 2026-12-04)."""
+    import subprocess
+    import sys
+    code = ("import sys, amra_core.boundary.tasks, amra_core.column, amra_core.stability, amra_core.simulation\n"
+            "print(' '.join(m[len('amra_core.'):].replace('.', '/') for m in sys.modules if m.startswith('amra_core.')))")
+    used = set(subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split())
+    from amra_core.boundary.spec import _SOLVER_SOURCES, ORCHESTRATION_SOURCES
+    assert used - set(_SOLVER_SOURCES) - set(ORCHESTRATION_SOURCES) == set()
