@@ -346,16 +346,22 @@ class Settled:
             pass
 
 
+def arrive_once(gate):
+    """A callable that marks one session arrived at ``gate`` (None: no gate) at most once: a session
+    arrives when it streams, or when it fails, so that it never holds the others."""
+    done = []
+
+    def arrive():
+        if gate is not None and not done:
+            done.append(True)
+            gate.arrive()
+    return arrive
+
+
 async def session(browser, url: str, moves: int, timeout_s: float, index: int, stagger_s: float,
                   settled: "Settled | None" = None) -> dict:
     await asyncio.sleep(index * stagger_s)
-    arrived = False
-
-    def arrive():
-        nonlocal arrived
-        if settled is not None and not arrived:
-            arrived = True
-            settled.arrive()
+    arrive = arrive_once(settled)
     out = {"latencies_s": [], "moves": [], "run_first_s": None, "load_s": None, "errors": []}
     ctx = await browser.new_context(viewport={"width": 1400, "height": 1000})
     page = await ctx.new_page()
@@ -807,13 +813,7 @@ async def protocol_session(url: str, arguments: dict, moves: int, timeout_s: flo
     with the new GJ. ``start_at``: when to connect (epoch s)."""
     from bokeh.events import ButtonClick, DocumentReady
     await asyncio.sleep(max(0.0, start_at - time.time()))
-    arrived = False
-
-    def arrive():
-        nonlocal arrived
-        if gate is not None and not arrived:
-            arrived = True
-            gate.arrive()
+    arrive = arrive_once(gate)
     out = {"latencies_s": [], "moves": [], "run_first_s": None, "load_s": None, "errors": []}
     s = ProtocolSession(url, arguments)
     try:
