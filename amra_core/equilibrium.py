@@ -24,7 +24,7 @@ from scipy.optimize import root
 from . import kernel_guard, kernels
 from .model import (L_THRUST, L_TORQUE, CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step,
                     transfer_state)
-from .shooting import PeriodicShooting
+from .shooting import PeriodicShooting, steps_per_rev
 
 MU_RANGE = (0.0, 0.5)
 
@@ -279,9 +279,7 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
     """March ``n_revs`` revolutions (rotor speed/descent held per the model flags) and return the
     state and the averages of thrust, torque, vertical and horizontal force over the last one,
     and the teeter history of the last revolution."""
-    omega = max(y[Y_OMEGA], 1.0)
-    steps_rev = max(int(round(2 * math.pi / omega / dt)), 16)
-    dt_rev = 2 * math.pi / omega / steps_rev
+    steps_rev, dt_rev = steps_per_rev(y[Y_OMEGA], dt)
     n = n_revs * steps_rev
     hist = np.zeros((steps_rev, kernels.N_HIST)); states = np.zeros((steps_rev, len(y)))
     if n_revs > 1:
@@ -334,7 +332,7 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
     # the periodic orbit of every trial is shot for with the transition matrix of a neighbouring
     # trim (a continuation's last one) or of this trim's start, formed again once if the Newton
     # iteration stalls with it; a cold start marches until it stalls near the trim
-    inherited = guess is not None and guess.shooting is not None and guess.shooting.n_y == model.n_y
+    inherited = guess is not None and guess.shooting is not None and guess.shooting.fits(model)
     shooting = guess.shooting.copy() if inherited else PeriodicShooting()
 
     def evaluate(z, n_revs):

@@ -47,16 +47,17 @@ class PeriodicContinuation:
             return fl.mu * omega * model.rotor.radius_m / math.cos(tilt)
         return fl.airspeed_m_s
 
+    def _held(self, model: CompiledModel, z) -> CompiledModel:
+        """``model`` at the trial (rotor speed, descent rate, tilt) ``z``, both speeds held."""
+        return model.with_controls(alpha_s_rad=z[2], airspeed_m_s=self._airspeed(model, z[0], z[2]),
+                                   hold_omega=True, hold_vd=True)
+
     def _evaluate(self, model, y, z, n_revs, dt):
-        omega, vd, tilt = z
-        m = model.with_controls(alpha_s_rad=tilt, airspeed_m_s=self._airspeed(model, omega, tilt),
-                                hold_omega=True, hold_vd=True)
-        y[Y_OMEGA] = omega
-        y[Y_VD] = vd
+        m = self._held(model, z)
+        y[Y_OMEGA], y[Y_VD] = z[0], z[1]
         if self.shooting.lu is not None:  # onto this trial's periodic orbit, then one revolution
-            r0 = self.shooting.revolutions
             y, _ = self.shooting.project(m, y, dt)
-            self.revolutions += self.shooting.revolutions - r0
+            self.revolutions += 1
             n_revs = 1
         y, avg, last = _march_revs(m, y, n_revs, dt)
         self.revolutions += n_revs
@@ -95,16 +96,11 @@ class PeriodicContinuation:
         dt = stable_time_step(model, z[0])
         try:
             gj = gj_mean_of(model)
-            if self.shooting.lu is not None and (self.shooting.n_y != model.n_y  # modes retained changed
-                                                 or abs(math.log(gj / self._shooting_gj)) > SHOOTING_REUSE_LN_GJ):
+            if not self.shooting.fits(model) or abs(math.log(gj / self._shooting_gj)) > SHOOTING_REUSE_LN_GJ:
                 self.shooting = PeriodicShooting()
             y, res, avg, last = self._evaluate(model, y, z, 6, dt)
             if self.shooting.lu is None:
-                m = model.with_controls(alpha_s_rad=z[2], airspeed_m_s=self._airspeed(model, z[0], z[2]),
-                                        hold_omega=True, hold_vd=True)
-                r0 = self.shooting.revolutions
-                self.shooting.build(m, y, dt)
-                self.revolutions += self.shooting.revolutions - r0
+                self.revolutions += self.shooting.build(self._held(model, z), y, dt)
                 self._shooting_gj = gj
                 y, res, avg, last = self._evaluate(model, y, z, 1, dt)
             J = self.J.copy() if self.J is not None else self._fd_jacobian(model, y, z, res, dt)

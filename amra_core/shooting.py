@@ -16,9 +16,10 @@ column), one Newton step from any ``y`` near the orbit is
 
     ds = (I - Phi_ss)^-1 (P_s(y) - y_s),    y* = P(y) + Phi_s ds
 
-for the whole state (azimuth advanced by one revolution). ``Phi_s`` is formed once per trim and
-reused while the controls change (a chord Newton: the projection's own error shrinks with each
-step the trim takes); it is formed again if a projection does not shrink the periodicity error.
+for the whole state (azimuth advanced by one revolution). ``Phi_s`` is reused while the controls
+change (a chord Newton: the projection's own error shrinks with each step the trim takes); the
+callers form it again when their iteration stalls with it (:func:`amra_core.equilibrium.trim_forward`,
+:class:`amra_core.periodic_trim.PeriodicContinuation`).
 """
 from __future__ import annotations
 
@@ -69,10 +70,11 @@ class PeriodicShooting:
         self.revolutions = 0
         self.builds = 0
 
-    @property
-    def n_y(self) -> int:
-        """Length of the state this matrix is for (0 before :meth:`build`)."""
-        return 0 if self.phi_s is None else self.phi_s.shape[0]
+    def fits(self, model: CompiledModel) -> bool:
+        """True if a matrix is formed and for ``model``'s state layout (the retained modes change
+        with GJ at the fem fidelities)."""
+        return (self.lu is not None and self.phi_s.shape[0] == model.n_y
+                and np.array_equal(self.idx, slow_states(model)))
 
     def copy(self) -> "PeriodicShooting":
         """The same matrix, with its own counters (the matrix itself is never changed in place)."""
@@ -80,8 +82,9 @@ class PeriodicShooting:
         out.phi_s, out.lu, out.idx = self.phi_s, self.lu, self.idx
         return out
 
-    def build(self, model: CompiledModel, y: np.ndarray, dt: float) -> None:
-        """Form the slow columns of the one-revolution transition matrix at ``y``."""
+    def build(self, model: CompiledModel, y: np.ndarray, dt: float) -> int:
+        """Form the slow columns of the one-revolution transition matrix at ``y``; returns the
+        revolutions that took."""
         import scipy.linalg as sla
         idx = slow_states(model)
         base = one_rev(model, y, dt)
@@ -94,10 +97,11 @@ class PeriodicShooting:
         self.builds += 1
         self.idx, self.phi_s = idx, phi
         self.lu = sla.lu_factor(np.eye(len(idx)) - phi[idx])
+        return len(idx) + 1
 
     def project(self, model: CompiledModel, y: np.ndarray, dt: float) -> tuple:
-        """One Newton step towards the periodic orbit from ``y``; returns (the new state, the
-        periodicity error it started from: max |P_s(y) - y_s|)."""
+        """One Newton step towards the periodic orbit from ``y`` (one revolution marched); returns
+        (the new state, the periodicity error it started from: max |P_s(y) - y_s|)."""
         import scipy.linalg as sla
         p = one_rev(model, y, dt)
         self.revolutions += 1
