@@ -15,24 +15,22 @@ import panel as pn
 
 from amra_core.boundary import MapSpec
 from amra_core.paper_cases import NOMINAL_GJ_NM2
+from amra_core.shapes import FIDELITIES
 
 from . import compute, exports
-from .controls import LIVE_PARAMETERS, UPLOADED, Controls, gj_slider
-from .inputs import checked_input, tooltip
-from .events import Applied, Finished, Fan, Ladder, Locus, ModeFrames, Modes, Notice, Rows
+from .controls import LIVE_PARAMETERS, PRESETS, UPLOADED, Controls, UploadError, parse_rotor_upload
+from .events import Applied, Fan, Finished, Ladder, Locus, ModeFrames, Modes, Notice, Rows
+from .inputs import checked_input, gj_slider, tooltip
 from .live import LivePlots, columns_from_rows
-from .presets import PRESETS
-from .rotor_upload import UploadError, parse_rotor_upload
 from .server.pool import LatestTasks, get_analysis_pool
 from .server.settings import ServerSettings
 from .session import Session
-from .throttle import Throttle, on_event_loop
 from .views.disc import DiscView
 from .views.fan import FanView
+from .views.help import help_pane
 from .views.ladder import LadderView
-from .views.map import MapView
+from .views.map import MapView, map_csv
 from .views.modes import ModesView
-from .views.help import HelpView
 from .views.rotor import LiveRotor
 from .views.sensitivity import SensitivityView
 from .views.status import StatusView, run_html
@@ -42,8 +40,6 @@ CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", 
                    "aero", "inflow", "map_columns", "map_coarse")
 MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
 REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
-
-
 PAPER_CG = 0.40  #: the paper's CG (Figs 10-13) [chord fraction]: every map has a column there
 
 
@@ -60,13 +56,6 @@ def case_label(c: Controls, scenario) -> str:
           else f"GJ {c.gj_nm2:.4g} N m²/rad")
     name = PRESETS[c.preset].label if c.preset != "custom" else c.rotor
     return f"{name} · {c.fidelity} · {gj} · EA {c.ea_pct:g} % · CG {c.cg_pct:g} % · {flight}"
-
-
-def change_label(values: dict) -> str:
-    """Short text of a live change's new values (GJ [N m²/rad], EA and CG [% chord])."""
-    parts = [f"GJ {values['gj_nm2']:.4g}"] if values.get("gj_nm2") is not None else []
-    parts += [f"{n} {100 * values[k]:.3g}%" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if values.get(k) is not None]
-    return " ".join(parts)
 
 
 def teeter_amplitude_rad(history: np.ndarray) -> float:
@@ -90,30 +79,29 @@ class Dashboard(pn.viewable.Viewer):
         self.alert = pn.pane.Alert("", alert_type="danger", visible=False, sizing_mode="stretch_width",
                                    name="messages")
         self.live = LivePlots()
-        self.status = StatusView(s, self.notify, doc)
-        self.modes, self.disc, self.fan, self.ladder = ModesView(s), DiscView(s), FanView(s, doc), LadderView(s)
+        self.status = StatusView(s, self.notify)
+        self.modes, self.disc, self.fan, self.ladder = ModesView(s), DiscView(s), FanView(s), LadderView(s)
         self.rotor_view = LiveRotor(s)
-        self.exports = exports.ExportBar(self.history_csv, self.modes_csv, self.map_csv)
+        self.exports = exports.ExportBar(history=self.history_csv, modes=self.modes_csv, map=self.map_csv)
         self.modes.on_pick = self.animate_mode
-        self.map = (MapView(registry, who=id(self), on_pick=self.load_cell, doc=doc) if registry is not None
-                    else None)
+        self.map = MapView(s, registry, who=id(self), on_pick=self.load_cell) if registry is not None else None
         self.uploaded = None
         self.sensitivity = (SensitivityView(s, self._sensitivity_case, self.tasks.submit, self.map.show_sensitivity,
                                             self.notify) if self.map is not None else None)
-        if self.sensitivity is not None:  # its text is a Bokeh Div: on the event loop, with the lock
-            self.sensitivity.button.on_click(lambda e: on_event_loop(doc, self.sensitivity.start))
+        if self.sensitivity is not None:  # its text changes: on the event loop, with the lock
+            self.sensitivity.button.on_click(lambda e: s.soon(self.sensitivity.start))
         self.last_history: Optional[np.ndarray] = None
         self._locus_key = None
-        self.refresh = Throttle(self.refresh_analyses, REFRESH_PERIOD_S, doc)
+        self._run_preset = "custom"  #: the preset the current run was started with
+        self.refresh = s.throttle(self.refresh_analyses, REFRESH_PERIOD_S)
         s.subscribe(Rows, lambda ev: self.live.append(columns_from_rows(ev.rows, ev.gj_nm2)))
         s.subscribe(Finished, self._finished)
-        s.subscribe(Applied, lambda ev: self.live.mark(ev.t_s, change_label(ev.values)))
-        self._run_preset = "custom"  #: the preset the current run was started with
+        s.subscribe(Applied, lambda ev: self.live.mark(ev.t_s, ev.text()))
         s.subscribe(Notice, lambda ev: self.notify(ev.text, ev.level))
         # Run and Reset clear the plots' Bokeh sources: on the event loop, with the document lock
-        c.param.watch(lambda e: on_event_loop(doc, self.start_run), "run")
+        c.param.watch(lambda e: s.soon(self.start_run), "run")
         c.param.watch(lambda e: s.stop(), "stop")
-        c.param.watch(lambda e: on_event_loop(doc, self.reset), "reset")
+        c.param.watch(lambda e: s.soon(self.reset), "reset")
         c.param.watch(self.run_ladder, "ladder")
         c.param.watch(self._on_live, list(LIVE_PARAMETERS))
         c.param.watch(self._on_case, list(CASE_PARAMETERS))
@@ -130,7 +118,20 @@ class Dashboard(pn.viewable.Viewer):
             getattr(pn.state.notifications, level if level in ("error", "warning", "info") else "error")(
                 text, duration=6000)
 
+    def _clear_messages(self) -> None:
+        self.messages.clear()
+        self.alert.visible = False
+
     # ------------------------------------------------------------------ actions
+    def _parts(self):
+        """(rotor, flight, settings) of the current case, or None after a message saying why not."""
+        c = self.controls
+        try:
+            return c.rotor_obj(self.uploaded), c.flight(), c.settings()
+        except Exception as exc:  # noqa: BLE001 - RotorError, SettingsError, ValueError
+            self.notify(f"invalid case: {exc}")
+            return None
+
     def start_run(self, *_) -> bool:
         try:
             scenario = self.controls.scenario(self.uploaded)
@@ -139,8 +140,7 @@ class Dashboard(pn.viewable.Viewer):
             return False
         self.live.clear()
         self.status.reset()
-        self.messages.clear()  # each run starts with a clean message area
-        self.alert.visible = False
+        self._clear_messages()  # each run starts with a clean message area
         self.status.case = case_label(self.controls, scenario)
         self.status.run.object = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
@@ -162,13 +162,11 @@ class Dashboard(pn.viewable.Viewer):
         self.ladder.previous = None
         self.ladder.compare(None, None)
         self.status.reset()
-        self.messages.clear()
-        self.alert.visible = False
+        self._clear_messages()
 
     def run_ladder(self, *_) -> None:
         try:
-            cases = {fid: self.controls.case(self.uploaded, fidelity=fid) for fid in ("rigid", "fem-torsion",
-                                                                                     "fem-coupled")}
+            cases = {fid: self.controls.case(self.uploaded, fidelity=fid) for fid in FIDELITIES}
         except Exception as exc:  # noqa: BLE001
             self.notify(f"cannot run the ladder: {exc}")
             return
@@ -177,14 +175,10 @@ class Dashboard(pn.viewable.Viewer):
 
     def animate_mode(self, real_part_per_s: float, frequency_hz: float, label: str) -> None:
         """Compute the frames of a mode of the current case's trim (analysis pool)."""
-        c = self.controls
-        try:
-            rotor, flight, settings = c.rotor_obj(self.uploaded), c.flight(), c.settings()
-        except Exception as exc:  # noqa: BLE001
-            self.notify(f"invalid case: {exc}")
-            return
-        self.tasks.submit("mode-frames", ModeFrames, compute.mode_frames, rotor, flight, settings,
-                          real_part_per_s, frequency_hz, label)
+        parts = self._parts()
+        if parts is not None:
+            self.tasks.submit("mode-frames", ModeFrames, compute.mode_frames, *parts, real_part_per_s, frequency_hz,
+                              label)
 
     def upload(self, data: bytes, filename: str) -> bool:
         try:
@@ -234,9 +228,9 @@ class Dashboard(pn.viewable.Viewer):
         rotor = self.uploaded if c.rotor == UPLOADED else c.rotor
         if rotor is None:
             raise ValueError("no rotor file uploaded")
-        cgs = map_columns(c.map_columns)
         return MapSpec(rotor=rotor, fidelity=c.fidelity, aero=c.aero, mu=float(c.mu), ea=c.ea_pct / 100.0,
-                       cg_values=cgs, gj_min=MAP_GJ_RANGE[0], gj_max=MAP_GJ_RANGE[1], n_coarse=c.map_coarse)
+                       cg_values=map_columns(c.map_columns), gj_min=MAP_GJ_RANGE[0], gj_max=MAP_GJ_RANGE[1],
+                       n_coarse=c.map_coarse)
 
     def refresh_analyses(self) -> None:
         """Recompute the modes, root locus and fan plot; follow the map for the current case."""
@@ -246,11 +240,10 @@ class Dashboard(pn.viewable.Viewer):
         self.exports.rename({"modes": names["modes"], "map": names["map"]})
         if self.map is not None:
             self.map.mark(c.cg_pct, c.gj_nm2)
-        try:
-            rotor, flight, settings = c.rotor_obj(self.uploaded), c.flight(), c.settings()
-        except Exception as exc:  # noqa: BLE001
-            self.notify(f"invalid case: {exc}")
+        parts = self._parts()
+        if parts is None:
             return
+        rotor, flight, settings = parts
         self.tasks.submit("modes", Modes, compute.modes_result, rotor, flight, settings)
         key = (c.rotor, id(self.uploaded), c.ea_pct, c.cg_pct, flight, settings)
         if key != self._locus_key:
@@ -265,30 +258,23 @@ class Dashboard(pn.viewable.Viewer):
 
     def pump(self) -> None:
         """Run whatever is due now, in the caller's thread (tests and scripts without a server)."""
-        for throttle in (self.session.delivery, self.status.clock, self.fan.marker, self.refresh,
-                         *([self.map.redraw] if self.map is not None else [])):
-            throttle.run_due()
+        self.session.pump()
 
     # ------------------------------------------------------------------ exports
     def history_csv(self):
-        sim = self.session.sim
         verdict = self.status.verdict.verdict if self.status.verdict is not None else None
-        return exports.history_csv(sim, self.last_history, verdict)
+        return exports.history_csv(self.session.sim, self.last_history, verdict)
 
     def modes_csv(self):
-        return exports.frame_csv(self.modes.frame, exports.controls_meta(self.controls))
+        return exports.modes_csv(self.modes.frame, self.controls)
 
     def map_csv(self):
-        from .views.map import map_csv
         return self.map.csv() if self.map is not None else map_csv([], complete=False)
 
     # ------------------------------------------------------------------ lifecycle
     def close(self, *args) -> None:
         """The session ended: stop the run (without waiting), drop its analyses, leave the map."""
         self.session.close()
-        for throttle in (self.status.clock, self.fan.marker, self.refresh,
-                         *([self.map.redraw] if self.map is not None else [])):
-            throttle.close()
         self.tasks.close()
         if self.map is not None:
             self.map.release()
@@ -308,86 +294,79 @@ class Dashboard(pn.viewable.Viewer):
             tip = {"description": tooltip(c.param[name])} if "description" in cls.param else {}
             return cls.from_param(c.param[name], **tip, **kw)
 
-        def num(name, **kw):  # typed numbers: a bad one gets a message under its input
-            return checked_input(c, name, **kw)
+        def num(name, css=None, **kw):  # typed numbers: a bad one gets a message under its input
+            return checked_input(c, name, css_classes=[css] if css else [], **kw)
         full, sel, slider = {"sizing_mode": "stretch_width"}, pn.widgets.Select, pn.widgets.FloatSlider
         button = pn.widgets.Button.from_param
         return pn.Column(
             w(sel, "preset", **full), explanation, w(sel, "rotor", **full), upload,
-            gj_slider(c), num("gj_nm2", css_classes=["amra-gj"], **full),
-            w(slider, "ea_pct", **full), w(slider, "cg_pct", **full), w(slider, "mu", **full),
-            w(sel, "fidelity", **full),
+            gj_slider(c), num("gj_nm2", "amra-gj", **full),
+            *[w(slider, name, **full) for name in ("ea_pct", "cg_pct", "mu")], w(sel, "fidelity", **full),
             pn.Row(w(sel, "aero", width=140), w(sel, "inflow", width=140)),
-            pn.Row(num("run_s", width=140, css_classes=["amra-run-s"]), num("speed", width=140,
-                                                                          css_classes=["amra-speed"])),
-            num("soften_at_s", css_classes=["amra-soften"], **full),
+            pn.Row(num("run_s", "amra-run-s", width=140), num("speed", "amra-speed", width=140)),
+            num("soften_at_s", "amra-soften", **full),
             pn.Row(button(c.param.run, button_type="primary", css_classes=["amra-run"]),
                    button(c.param.stop, button_type="warning", css_classes=["amra-stop"]),
                    button(c.param.reset, button_type="light", css_classes=["amra-reset"])),
             button(c.param.ladder, sizing_mode="stretch_width", css_classes=["amra-ladder"]),
             pn.Card(num("airspeed_m_s"), num("omega_hold_rad_s"), num("map_columns", widget_cls=pn.widgets.IntInput),
                     num("map_coarse", widget_cls=pn.widgets.IntInput), title="Advanced: flight and map grid",
-                    collapsed=True,
-                    sizing_mode="stretch_width"),
-            self.exports.panel(),
-            sizing_mode="stretch_width", name="sidebar")
+                    collapsed=True, sizing_mode="stretch_width"),
+            self.exports.panel(), sizing_mode="stretch_width", name="sidebar")
 
     def header(self) -> pn.Row:
-        """The header: the presentation toggle, and in presentation mode Run, Stop, a large GJ input and
-        the verdict in one line."""
+        """The presentation toggle, and in presentation mode Run, Stop, a large GJ input and the verdict."""
         c = self.controls
         big = {"styles": {"font-size": "20px"}, "stylesheets": [":host input {font-size: 20px; height: 40px}"]}
         button = pn.widgets.Button.from_param
-        live_bar = pn.Row(
+        self.live_bar = pn.Row(
             button(c.param.run, button_type="primary", css_classes=["amra-present-run"], width=110, height=44,
                    description=None),
             button(c.param.stop, button_type="warning", width=110, height=44, description=None),
             checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, **big),
-            pn.pane.Bokeh(self.status.badge.div, width=300), visible=c.present, margin=0)
-        c.param.watch(lambda e: setattr(live_bar, "visible", e.new), "present")
+            self.status.badge, visible=c.present, margin=0)
         toggle = pn.widgets.Toggle.from_param(c.param.present, button_type="light", width=170,
                                               css_classes=["amra-present"], margin=(10, 10))
-        return pn.Row(toggle, live_bar, sizing_mode="stretch_width")
-
-    def present(self, on: bool) -> None:
-        """Presentation mode on or off: taller live plots and larger fonts (the header shows Run, Stop,
-        GJ and the verdict; the top status row steps aside)."""
-        self.live.present(on)
-        self.top.visible = not on
+        return pn.Row(toggle, self.live_bar, sizing_mode="stretch_width")
 
     def main(self) -> pn.Column:
-        self.top = top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"),
-                                sizing_mode="stretch_width", visible=not self.controls.present)
-        self.controls.param.watch(lambda e: self.present(e.new), "present")
+        self.top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"),
+                          sizing_mode="stretch_width")
         # the live plots are shown at once (deferred, the first Run waited 1.4 s longer for them to
         # reach the page); the views' tabs come after the first paint, each built when first shown
-        return pn.Column(top, self.live_grid(),
-                         pn.panel(self.views, defer_load=True, sizing_mode="stretch_width"),
-                         sizing_mode="stretch_width", name="main")
-
-    def live_grid(self) -> pn.GridBox:
         grid = pn.GridBox(*[pn.pane.Bokeh(f, sizing_mode="stretch_width") for f in self.live.figures()], ncols=2,
                           sizing_mode="stretch_width")
-        self.live.present(self.controls.present)
-        return grid
+        return pn.Column(self.top, grid, pn.panel(self.views, defer_load=True, sizing_mode="stretch_width"),
+                         sizing_mode="stretch_width", name="main")
+
+    def present(self, on: bool) -> None:
+        """Presentation mode on or off: taller live plots and larger fonts, the header's live bar shown
+        and the top status row stepping aside."""
+        self.live.present(on)
+        self.top.visible = not on
+        self.live_bar.visible = on
 
     def views(self) -> pn.Tabs:
         """The analysis views, one tab each; a tab's models are built when it is first shown."""
+        def lazy(make):  # evaluated when the tab is first shown
+            return pn.param.ParamFunction(make, lazy=True, sizing_mode="stretch_width")
         the_map = pn.Column(self.map, self.sensitivity, sizing_mode="stretch_width") if self.map is not None \
             else pn.pane.Markdown("map disabled")
-        def lazy(view):  # evaluated when the tab is first shown
-            return pn.param.ParamFunction(lambda: view, lazy=True, sizing_mode="stretch_width")
-        return pn.Tabs(("Boundary map", the_map),
-                       ("Modes & root locus", lazy(self.modes)), ("Live rotor", lazy(self.rotor_view)),
-                       ("Rotor disc", lazy(self.disc)), ("Fan plot", lazy(self.fan)),
-                       ("Fidelity ladder", lazy(self.ladder)), ("Help", lazy(HelpView(self.controls))),
+        return pn.Tabs(("Boundary map", the_map), ("Modes & root locus", lazy(lambda: self.modes)),
+                       ("Live rotor", lazy(lambda: self.rotor_view)), ("Rotor disc", lazy(lambda: self.disc)),
+                       ("Fan plot", lazy(lambda: self.fan)), ("Fidelity ladder", lazy(lambda: self.ladder)),
+                       ("Help", lazy(lambda: help_pane(self.controls))),
                        dynamic=True, sizing_mode="stretch_width", name="views")
 
     def __panel__(self):
         # one root per template area (each root added to a document makes Bokeh recompute its
         # references); no busy indicator (Panel's busy flag is per process: every session's events
         # would spin every page's indicator)
-        title = "AMRA" if self.controls.present else TITLE  # room for the header's controls on a projector
-        return pn.template.BootstrapTemplate(title=title, sidebar=[self.sidebar()], main=[self.main()],
-                                             header=[self.header()], sidebar_width=330, header_background="#263238",
-                                             busy_indicator=None, collapsed_sidebar=self.controls.present)
+        c = self.controls
+        header, main = self.header(), self.main()
+        self.present(c.present)
+        c.param.watch(lambda e: self.present(e.new), "present")
+        title = "AMRA" if c.present else TITLE  # room for the header's controls on a projector
+        return pn.template.BootstrapTemplate(title=title, sidebar=[self.sidebar()], main=[main], header=[header],
+                                             sidebar_width=330, header_background="#263238", busy_indicator=None,
+                                             collapsed_sidebar=c.present)

@@ -122,9 +122,16 @@ def fan_data(rotor, fidelity: str, n_modes: int = 8) -> dict:
     return {"omega": fp["omega_rad_s"], "modes": [(m["label"], m["frequency_hz"]) for m in fp["modes"]]}
 
 
+def ladder_curves(history: np.ndarray) -> dict:
+    """``{t, omega, teeter_deg, twist_deg}`` of a history (rows evenly thinned to :data:`LADDER_POINTS`)."""
+    h = history[np.linspace(0, len(history) - 1, min(LADDER_POINTS, len(history))).astype(int)]
+    return {"t": h[:, COL["t_s"]], "omega": h[:, COL["omega_rad_s"]], "teeter_deg": np.degrees(h[:, COL["teeter_rad"]]),
+            "twist_deg": np.degrees(h[:, COL["tip_twist_0_rad"]])}
+
+
 def run_ladder(cases: dict) -> dict:
-    """``{fidelity: Case}`` -> ``{"runs": {fidelity: {t, omega, teeter_deg, twist_deg}}, "verdicts": rows}``:
-    each case run unpaced to its end, with its verdict."""
+    """``{fidelity: Case}`` -> ``{"runs": {fidelity: ladder_curves}, "verdicts": rows}``: each case run
+    unpaced to its end, with its verdict."""
     runs, rows = {}, []
     for fid in FIDELITIES:
         case = cases.get(fid)
@@ -137,12 +144,7 @@ def run_ladder(cases: dict) -> dict:
         except Exception as exc:  # noqa: BLE001 - one failed rung does not stop the ladder
             rows.append((fid, "failed", None, None, None, str(exc)))
             continue
-        h = sim.history
-        idx = np.linspace(0, len(h) - 1, min(LADDER_POINTS, len(h))).astype(int)
-        h = h[idx]
-        runs[fid] = {"t": h[:, COL["t_s"]], "omega": h[:, COL["omega_rad_s"]],
-                     "teeter_deg": np.degrees(h[:, COL["teeter_rad"]]),
-                     "twist_deg": np.degrees(h[:, COL["tip_twist_0_rad"]])}
+        runs[fid] = ladder_curves(sim.history)
         rows.append((fid, v.verdict, v.growth_rate_per_s, v.frequency_hz, v.collapse_time_s, v.explanation))
     return {"runs": runs, "verdicts": rows}
 

@@ -1,35 +1,90 @@
-"""The case the user is exploring: the single source of truth for every control of a session.
+"""The case the user is exploring: the single source of truth for every control of a session, and
+the ways values reach it besides its widgets (classroom presets, a shared link, a rotor file).
 
 One :class:`Controls` per session. ``doc=`` strings (with units) become the widgets' tooltips;
 bounds are enforced by param, so a value from a widget, a preset or the URL is validated the same
 way. Run, Stop, Reset and the fidelity ladder are ``param.Event``s (the buttons are views of them).
-GJ is one parameter, shown twice: a log-scale slider (:func:`gj_slider`) and the exact input.
 :meth:`Controls.case` builds the frozen :class:`amra_core.simulation.Case`; the core's own
 validation (``SettingsError``, ``RotorError``) then names anything the bounds cannot express.
 """
 from __future__ import annotations
 
 import math
+import tomllib
+import urllib.parse
+from dataclasses import dataclass
+from types import MappingProxyType
 
-import panel as pn
 import param
-from bokeh.models import CustomJSTickFormatter
 
 from amra_core.flight import AERO_MODELS, INFLOW_MODELS, FlightCondition, SolverSettings
-from amra_core.paper_cases import NOMINAL_GJ_NM2
+from amra_core.paper_cases import NOMINAL_GJ_NM2, PAPER_CASES
+from amra_core.rotor import Rotor, RotorError
+from amra_core.rotor_io import load_preset, preset_names, rotor_from_dict
 from amra_core.scenario import LiveChange, Scenario
-from amra_core.rotor import Rotor
-from amra_core.rotor_io import load_preset, preset_names
 from amra_core.shapes import FIDELITIES
 from amra_core.simulation import Case
-
-from .presets import PRESETS
 
 UPLOADED = "uploaded file"
 LIVE_PARAMETERS = ("gj_nm2", "ea_pct", "cg_pct")  #: changed mid-run without restarting
 GJ_BOUNDS = (10.0, 10000.0)
 
 
+# ---------------------------------------------------------------------------------------- presets
+@dataclass(frozen=True)
+class Preset:
+    """A classroom preset: control values and the card text shown under the selector."""
+    label: str
+    explanation: str
+    values: tuple  #: ((control name, value), ...)
+    #: Table 1: (measured teeter amplitude [rad], the original AMRA's [rad]) to show beside the run's
+    teeter_reference_rad: tuple | None = None
+
+    def as_dict(self) -> dict:
+        return dict(self.values)
+
+
+_BASE = (("airspeed_m_s", 0.0), ("omega_hold_rad_s", 0.0), ("aero", "theodorsen"), ("inflow", "uniform"),
+         ("soften_at_s", 0.0))
+
+
+def _p(label, explanation, teeter_reference_rad=None, **values):
+    return Preset(label, explanation, tuple((dict(_BASE) | values).items()), teeter_reference_rad)
+
+
+def _paper(key: str) -> Preset:
+    """Figs 10-13 tell the paper's story (:mod:`amra_core.paper_cases`): the paper-boundary blade
+    starts in steady autorotation at its nominal GJ and is softened to the figure's GJ at t = 2 s."""
+    pc = PAPER_CASES[key]
+    text = f"**The paper:** {pc.paper_reports}.\n\n**This model:** {pc.model_gives}"
+    return _p(pc.label, text, rotor="paper-boundary", gj_nm2=pc.gj_nm2, ea_pct=32.0, cg_pct=40.0, mu=pc.mu,
+              fidelity=pc.fidelity, run_s=pc.run_s, soften_at_s=pc.soften_at_s)
+
+
+def _table1(case: str, speed_m_s: float, omega: float, measured: float, amra: float) -> Preset:
+    """Table 1 holds the rotor speed at the measured mean in level flight and compares the teeter
+    amplitude with the flight measurement and the original AMRA."""
+    text = (f"Paper Table 1 case {case}: McCutcheon rotor (GJ, EA, CG at their span means), rotor speed held "
+            f"at {omega:g} rad/s, level flight at {speed_m_s:g} m/s. **Teeter amplitude:** measured in flight "
+            f"{measured:g} rad, original AMRA {amra:g} rad; this model's is shown when the run ends. With the "
+            f"rotor speed held, the verdict only says whether the kick dies out.")
+    return _p(f"Table 1 {case}: G-UNIV, {speed_m_s:g} m/s, Ω {omega:g} rad/s", text, (measured, amra),
+              rotor="mccutcheon", gj_nm2=1471.0, ea_pct=31.4, cg_pct=33.0, mu=0.0, airspeed_m_s=speed_m_s,
+              omega_hold_rad_s=omega, fidelity="rigid", run_s=5.0)
+
+
+PRESETS = MappingProxyType({
+    "custom": Preset("Custom (keep the current values)", "Your own case: set the controls below.", ()),
+    "nominal": _p("Nominal blade, axial", "Paper-boundary blade at its nominal GJ 1500 N m²/rad: stable steady "
+                  "autorotation; the kick decays.", rotor="paper-boundary", gj_nm2=1500.0, ea_pct=32.0,
+                  cg_pct=40.0, mu=0.0, fidelity="rigid", run_s=10.0),
+    **{key: _paper(key) for key in ("fig10", "fig11", "fig12", "fig13")},  # Figs 12-13: μ = 0.1 assumed
+    "table1a": _table1("A", 14.0, 38.0, 0.031, 0.026),
+    "table1b": _table1("B", 27.0, 41.0, 0.058, 0.056),
+})
+
+
+# ---------------------------------------------------------------------------------------- controls
 class Controls(param.Parameterized):
     """Every value that determines a run, a stability analysis and a boundary map."""
 
@@ -91,43 +146,36 @@ class Controls(param.Parameterized):
         self._applying_preset = False
         if params.get("preset", "custom") != "custom":  # watchers do not fire on construction
             self._apply_preset()
-            explicit = {k: v for k, v in params.items() if k != "preset"}
             with param.parameterized.discard_events(self):
-                self.param.update(**explicit)
+                self.param.update(**{k: v for k, v in params.items() if k != "preset"})
 
     @param.depends("preset", watch=True)
     def _apply_preset(self):
         values = PRESETS[self.preset].as_dict()
         if "run_s" in values:
             values["run_s"] = min(values["run_s"], self.param.run_s.bounds[1])
-        if values:
-            self._applying_preset = True
-            try:
-                self.param.update(**values)
-            finally:
-                self._applying_preset = False
+        self._applying_preset = True
+        try:
+            self.param.update(**values)
+        finally:
+            self._applying_preset = False
 
-    @param.depends(*[p for p in ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s",
-                                 "fidelity", "aero", "inflow", "soften_at_s")], watch=True)
+    @param.depends("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
+                   "aero", "inflow", "soften_at_s", watch=True)
     def _left_preset(self):
         if not self._applying_preset and self.preset != "custom":
-            values = PRESETS[self.preset].as_dict()
-            if any(getattr(self, k) != v for k, v in values.items() if k in self.param):
+            if any(getattr(self, k) != v for k, v in PRESETS[self.preset].as_dict().items()):
                 with param.parameterized.discard_events(self):
                     self.preset = "custom"
 
     # -- mapping to the solver
-    def base_rotor(self, uploaded: Rotor | None = None) -> Rotor:
-        if self.rotor == UPLOADED:
-            if uploaded is None:
-                raise ValueError("rotor = 'uploaded file' is not allowed: no rotor file has been uploaded "
-                                 "(choose a shipped rotor or upload a TOML file)")
-            return uploaded
-        return load_preset(self.rotor)
-
     def rotor_obj(self, uploaded: Rotor | None = None) -> Rotor:
-        return self.base_rotor(uploaded).with_overrides(gj_nm2=self.gj_nm2, x_ea=self.ea_pct / 100.0,
-                                                        x_cg=self.cg_pct / 100.0)
+        """The rotor (shipped or ``uploaded``) with the controls' uniform GJ, EA and CG."""
+        if self.rotor == UPLOADED and uploaded is None:
+            raise ValueError("rotor = 'uploaded file' is not allowed: no rotor file has been uploaded "
+                             "(choose a shipped rotor or upload a TOML file)")
+        base = uploaded if self.rotor == UPLOADED else load_preset(self.rotor)
+        return base.with_overrides(gj_nm2=self.gj_nm2, x_ea=self.ea_pct / 100.0, x_cg=self.cg_pct / 100.0)
 
     def flight(self) -> FlightCondition:
         hold = self.omega_hold_rad_s or None
@@ -161,18 +209,121 @@ class Controls(param.Parameterized):
         return {k: getattr(self, k) for k in self.param if k not in ("name", "run", "stop", "reset", "ladder")}
 
 
-def gj_slider(controls: Controls) -> pn.widgets.FloatSlider:
-    """GJ on a log10 scale, labelled in N m²/rad. A release sets ``controls.gj_nm2``; a change of
-    ``gj_nm2`` from anywhere moves the handle. No echo: a handle moved from the server changes
-    ``value`` only, and only the browser's release changes ``value_throttled``."""
-    lo, hi = (math.log10(b) for b in GJ_BOUNDS)
-    s = pn.widgets.FloatSlider(name="GJ (log scale) [N m²/rad]", start=lo, end=hi, step=0.005,
-                               value=math.log10(controls.gj_nm2), sizing_mode="stretch_width",
-                               format=CustomJSTickFormatter(code="return (10 ** tick).toPrecision(3)"),
-                               css_classes=["amra-gj-slider"])
+# ---------------------------------------------------------------------------------------- links
+#: control name -> URL key: every control is in the URL, so a case can be shared as a link
+URL_KEYS = {"preset": "preset", "rotor": "rotor", "gj_nm2": "gj", "ea_pct": "ea", "cg_pct": "cg", "mu": "mu",
+            "airspeed_m_s": "v", "omega_hold_rad_s": "omega_hold", "fidelity": "fidelity", "aero": "aero",
+            "inflow": "inflow", "run_s": "run_s", "soften_at_s": "soften_at", "speed": "speed",
+            "present": "present", "map_columns": "map_columns", "map_coarse": "map_coarse"}
+_BY_KEY = {v: k for k, v in URL_KEYS.items()}
 
-    def released(event):
-        controls.gj_nm2 = min(max(float(f"{10 ** event.new:.4g}"), GJ_BOUNDS[0]), GJ_BOUNDS[1])
-    s.param.watch(released, "value_throttled")
-    controls.param.watch(lambda e: setattr(s, "value", math.log10(e.new)), "gj_nm2")
-    return s
+
+def _coerce(p: param.Parameter, name: str, raw):
+    if isinstance(p, param.Boolean):
+        text = str(raw).strip().lower()
+        if text in ("1", "true", "yes", "on"):
+            return True
+        if text in ("0", "false", "no", "off"):
+            return False
+        raise ValueError(f"{name} = {raw!r} is not allowed: must be true or false")
+    if isinstance(p, param.Integer):
+        if isinstance(raw, float) and raw.is_integer():
+            raw = int(raw)
+        if isinstance(raw, str):
+            if not raw.strip().lstrip("+-").isascii() or not raw.strip().lstrip("+-").isdigit():
+                raise ValueError(f"{name} = {raw!r} is not allowed: must be an integer")
+            raw = int(raw)
+    elif isinstance(p, param.Number):
+        if isinstance(raw, str):
+            raw = float(raw)
+        if isinstance(raw, (int, float)) and not isinstance(raw, bool) and not math.isfinite(raw):
+            raise ValueError(f"{name} = {raw!r} is not allowed: must be a finite number")
+    elif isinstance(p, param.Selector) and not isinstance(raw, str):
+        raw = str(raw)
+    return raw
+
+
+def apply_query(controls: Controls, query: dict) -> list:
+    """Apply a link's values (raw strings, or values parsed as ``Location.query_params`` parses them),
+    the preset first so explicit values win, each validated as a widget's is; return a message for
+    each one rejected (the control keeps its value)."""
+    errors = []
+    for key in sorted((k for k in query if k in _BY_KEY), key=lambda k: k != "preset"):
+        name, raw = _BY_KEY[key], query[key]
+        p = controls.param[name]
+        try:
+            value = _coerce(p, key, raw)
+            if name == "rotor" and value == UPLOADED:
+                raise ValueError("an uploaded rotor cannot be shared by link (upload the file again)")
+            controls.param.update({name: value})
+        except Exception as exc:  # noqa: BLE001 - every bad value becomes a message
+            allowed = ""
+            if isinstance(p, param.Number) and p.bounds:
+                allowed = f" (allowed {p.bounds[0]:g} to {p.bounds[1]:g})"
+            elif isinstance(p, param.Selector):
+                allowed = f" (allowed: {', '.join(map(str, p.objects))})"
+            elif isinstance(p, param.Boolean):
+                allowed = " (allowed: true or false)"
+            why = str(exc).split("\n")[0]
+            errors.append(f"link parameter {key} = {raw!r} was ignored{allowed}: "
+                          f"{why if len(why) < 200 else why[:200] + ' ...'}")
+    return errors
+
+
+def query_string(controls: Controls) -> str:
+    """The URL query for the current values (what a shared link carries)."""
+    return urllib.parse.urlencode({key: getattr(controls, name) for name, key in URL_KEYS.items()})
+
+
+def parse_link_query(query: str) -> dict:
+    """A URL query string (with or without the leading '?') as ``{key: raw string}``."""
+    return dict(urllib.parse.parse_qsl(query.lstrip("?"), keep_blank_values=True))
+
+
+def apply_session_query(controls: Controls, notify) -> None:
+    """At session creation: apply the link's values, so the first paint already shows the case."""
+    import panel as pn
+    args = pn.state.session_args or {}
+    raw = {k: v[-1].decode("utf-8", "replace") if isinstance(v[-1], bytes) else str(v[-1])
+           for k, v in args.items() if v}
+    for msg in apply_query(controls, raw):
+        notify(msg)
+
+
+def sync_url(controls: Controls) -> None:
+    """After the page has loaded: mirror every control in the URL (``pn.state.location.sync``)."""
+    import panel as pn
+    if pn.state.location is not None:
+        # every value but the preset: Location.sync applies the link's values in one batch, after
+        # which the preset's watcher would overwrite the edits (?preset=nominal&gj=100 opened at
+        # GJ 1500); the values alone reproduce the case, and a link's preset was applied first
+        # by apply_session_query (whose messages name any bad value, so none are repeated here)
+        pn.state.location.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"},
+                               on_error=lambda bad: None)
+
+
+# ---------------------------------------------------------------------------------------- rotor files
+MAX_BYTES = 256 * 1024  #: a rotor description is a few kB; anything near this is not one
+
+
+class UploadError(ValueError):
+    """The upload is not a usable rotor file; the message says why, naming the file."""
+
+
+def parse_rotor_upload(data: bytes | None, filename: str = "upload") -> Rotor:
+    """A :class:`Rotor` from the bytes of a TOML rotor file (``assets/rotors/*.toml``), parsed from
+    memory with a size cap."""
+    name = filename or "upload"
+    if not data:
+        raise UploadError(f"rotor file {name!r} is empty")
+    if len(data) > MAX_BYTES:
+        raise UploadError(f"rotor file {name!r} is {len(data) / 1024:.0f} kB: too large "
+                          f"(a rotor description is a few kB; the limit is {MAX_BYTES // 1024} kB)")
+    try:
+        return rotor_from_dict(tomllib.loads(data.decode("utf-8")))
+    except UnicodeDecodeError:
+        raise UploadError(f"rotor file {name!r} is not UTF-8 text (expected a TOML rotor description)") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise UploadError(f"rotor file {name!r} is not valid TOML: {exc}") from None
+    except (RotorError, TypeError, ValueError) as exc:
+        raise UploadError(f"rotor file {name!r}: {exc}") from None

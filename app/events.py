@@ -1,12 +1,9 @@
-"""What a session tells its views: one frozen dataclass per kind of news.
-
-The run thread, the analysis pool and the map job produce these; :class:`app.session.Session`
-hands each to the views that subscribed to its type, on the session's event loop. Units are SI
-unless a name says otherwise.
-"""
+"""What a session tells its views: one frozen dataclass per kind of news (SI units unless a name
+says otherwise). The run thread, the analysis pool and the map job produce them;
+:class:`app.session.Session` hands each to the views that subscribed to its type."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 from typing import Any
 
 import numpy as np
@@ -21,10 +18,12 @@ class Notice:
 
 @dataclass(frozen=True)
 class RunStatus:
-    """What the run is doing, as a line of text (``state``: trimming, running, idle)."""
+    """What the run is doing (``state``: trimming, running, idle) as a line of text; while it runs,
+    once a second, with its rotor speed."""
     run_id: int
     state: str
     text: str
+    omega_rad_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -46,10 +45,17 @@ class Rows:
 
 @dataclass(frozen=True)
 class Applied:
-    """A live change (GJ [N m²/rad], EA and CG [chord fractions]) took effect at ``t_s``."""
+    """A live or scripted change (GJ [N m²/rad], EA and CG [chord fractions]) took effect at ``t_s``."""
     run_id: int
     values: dict
     t_s: float
+
+    def text(self, sep: str = " ", unit: bool = False) -> str:
+        """The new values, e.g. ``GJ 700 EA 30%`` (``unit``: with GJ's unit)."""
+        v = self.values
+        parts = [f"GJ {v['gj_nm2']:.4g}" + (" N m²/rad" if unit else "")] if v.get("gj_nm2") is not None else []
+        parts += [f"{n} {100 * v[k]:.3g} %" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if v.get(k) is not None]
+        return sep.join(parts)
 
 
 @dataclass(frozen=True)
@@ -71,11 +77,6 @@ class Pose:
 
 
 @dataclass(frozen=True)
-class ModeFrames:
-    result: dict  #: app.compute.mode_frames
-
-
-@dataclass(frozen=True)
 class Disc:
     """Spanwise distributions over the last revolution (``Simulation.spanwise_last_revolution``)."""
     run_id: int
@@ -92,28 +93,16 @@ class Finished:
     t_s: float
 
 
-@dataclass(frozen=True)
-class Modes:
-    result: dict  #: app.compute.modes_result
+def _result(name: str, function: str):
+    return make_dataclass(name, [("result", dict)], frozen=True,
+                          namespace={"__doc__": f"The result of :func:`app.compute.{function}`.",
+                                     "__module__": __name__})
 
 
-@dataclass(frozen=True)
-class Locus:
-    result: dict  #: app.compute.locus_result
-
-
-@dataclass(frozen=True)
-class Fan:
-    result: dict  #: app.compute.fan_data
-
-
-@dataclass(frozen=True)
-class Ladder:
-    result: dict  #: app.compute.run_ladder
-
-
-@dataclass(frozen=True)
-class Sensitivity:
-    """The boundaries' sensitivity to every estimate at one CG column
-    (:meth:`amra_core.sensitivity.SensitivityResult.to_dict`)."""
-    result: dict
+# the analyses' results from the process pool, one type per analysis
+Modes = _result("Modes", "modes_result")
+Locus = _result("Locus", "locus_result")
+Fan = _result("Fan", "fan_data")
+Ladder = _result("Ladder", "run_ladder")
+ModeFrames = _result("ModeFrames", "mode_frames")
+Sensitivity = _result("Sensitivity", "sensitivity_study")

@@ -8,7 +8,6 @@ Every file is named after its case (``amra-fig10-rigid-gj100-cg40-history.csv``)
 from __future__ import annotations
 
 import io
-from typing import Callable
 
 import numpy as np
 import pandas as pd
@@ -16,6 +15,8 @@ import panel as pn
 
 from amra_core.export import case_meta, file_name, table_csv
 from amra_core.simulation import HISTORY_COLUMNS
+
+LABELS = {"history": "Time histories (CSV)", "modes": "Mode table (CSV)", "map": "Boundary map (CSV)"}
 
 
 def history_csv(sim, history: np.ndarray | None = None, verdict: str | None = None) -> io.StringIO:
@@ -26,16 +27,12 @@ def history_csv(sim, history: np.ndarray | None = None, verdict: str | None = No
     return io.StringIO(table_csv(HISTORY_COLUMNS, h, meta))
 
 
-def frame_csv(frame: pd.DataFrame, meta: dict) -> io.StringIO:
-    """A table (columns with units in their names) with the case in ``#`` lines above."""
-    return io.StringIO(table_csv(list(frame.columns), frame.itertuples(index=False), meta))
-
-
-def controls_meta(c) -> dict:
-    """The case of the controls, in the page's units."""
-    return {"preset": c.preset, "rotor": c.rotor, "gj_nm2": float(c.gj_nm2), "ea_pct_chord": float(c.ea_pct),
+def modes_csv(frame: pd.DataFrame, c) -> io.StringIO:
+    """The mode table (columns with units in their names) with the case of the controls ``c`` above."""
+    meta = {"preset": c.preset, "rotor": c.rotor, "gj_nm2": float(c.gj_nm2), "ea_pct_chord": float(c.ea_pct),
             "cg_pct_chord": float(c.cg_pct), "mu": float(c.mu), "airspeed_m_s": float(c.airspeed_m_s),
             "fidelity": c.fidelity, "aero": c.aero, "inflow": c.inflow}
+    return io.StringIO(table_csv(list(frame.columns), frame.itertuples(index=False), meta))
 
 
 def names_for(c) -> dict:
@@ -46,18 +43,13 @@ def names_for(c) -> dict:
             "map": file_name("map", case=case, fidelity=c.fidelity, mu=float(c.mu))}
 
 
-def download(label: str, filename: str, callback: Callable[[], io.StringIO], css: str) -> pn.widgets.FileDownload:
-    return pn.widgets.FileDownload(callback=callback, filename=filename, label=label, button_type="default",
-                                   sizing_mode="stretch_width", css_classes=[css])
-
-
 class ExportBar:
-    """The three download buttons; :meth:`rename` names them after a case."""
+    """The three download buttons (``callbacks``: history, modes, map); :meth:`rename` names them."""
 
-    def __init__(self, history: Callable, modes: Callable, cells: Callable):
-        self.buttons = {"history": download("Time histories (CSV)", "amra-history.csv", history, "amra-export-history"),
-                        "modes": download("Mode table (CSV)", "amra-modes.csv", modes, "amra-export-modes"),
-                        "map": download("Boundary map (CSV)", "amra-map.csv", cells, "amra-export-map")}
+    def __init__(self, **callbacks):
+        self.buttons = {k: pn.widgets.FileDownload(callback=callbacks[k], filename=f"amra-{k}.csv", label=label,
+                                                   button_type="default", sizing_mode="stretch_width",
+                                                   css_classes=[f"amra-export-{k}"]) for k, label in LABELS.items()}
 
     def rename(self, names: dict) -> None:
         for key, name in names.items():

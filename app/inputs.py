@@ -1,11 +1,10 @@
-"""Number inputs that say what is wrong: every bad value gets a visible message next to its control.
+"""The controls' own widgets: number inputs that say what is wrong, and GJ's log-scale slider.
 
 A widget made by ``from_param`` carries the parameter's bounds to the browser, which then clamps or
 reverts a typed value without a word (GJ 0, 1e9, a run of -5 s). :func:`checked_input` gives the
-browser no bounds: the value comes to the server, :class:`Controls` (param) validates it, and a bad
-one leaves the control as it was with a message under the input naming the allowed range, until
-the next good value. The tooltip of every control states its unit and allowed range
-(:func:`tooltip`).
+browser no bounds: :class:`~app.controls.Controls` (param) validates the value, and a bad one
+leaves the control as it was with a message under the input naming the allowed range, until the
+next good value. Every tooltip states the unit and allowed range (:func:`tooltip`).
 """
 from __future__ import annotations
 
@@ -14,14 +13,14 @@ import math
 
 import panel as pn
 import param
+from bokeh.models import CustomJSTickFormatter
+
+from .controls import GJ_BOUNDS
 
 
 def allowed_range(p: param.Parameter) -> str:
     """``"10 to 10000"`` for a bounded number parameter ('' otherwise)."""
-    if isinstance(p, param.Number) and p.bounds:
-        lo, hi = p.bounds
-        return f"{lo:g} to {hi:g}"
-    return ""
+    return f"{p.bounds[0]:g} to {p.bounds[1]:g}" if isinstance(p, param.Number) and p.bounds else ""
 
 
 def tooltip(p: param.Parameter) -> str:
@@ -45,43 +44,43 @@ def check_message(p: param.Parameter, label: str, raw) -> str:
 
 def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widgets.FloatInput, **kw) -> pn.Column:
     """An input for number parameter ``name`` of ``controls``, and its message line (class
-    ``amra-msg``, empty while the value is good)."""
+    ``amra-msg``, made at the first bad value: one model less per input at page build)."""
     p = controls.param[name]
     label = p.label or name
     widget = widget_cls(value=getattr(controls, name), label=label, description=tooltip(p), **kw)
     box = pn.Column(widget, sizing_mode=kw.get("sizing_mode", "stretch_width"), margin=0)
-    state = {"setting": False, "message": None}
-
-    def show(text: str) -> None:  # the message line is made at the first bad value (page build: one model less)
-        message = state["message"]
-        if message is None and text:
-            message = state["message"] = pn.pane.HTML("", css_classes=["amra-msg"], sizing_mode="stretch_width",
-                                                      styles={"color": "#b71c1c", "font-size": "90%"},
-                                                      margin=(0, 10, 4, 10))
-            box.append(message)
-        if message is not None:
-            message.object = html.escape(text)
-            message.visible = bool(text)
 
     def typed(event):
-        if state["setting"]:
-            return
-        bad = check_message(p, label, event.new)
+        bad = "" if event.new == getattr(controls, name) else check_message(p, label, event.new)
         if not bad:
-            try:
+            try:  # (a value the control already has: set from elsewhere, or typed again)
                 controls.param.update({name: event.new})
             except Exception as exc:  # noqa: BLE001 - what param refuses is said, not swallowed
                 bad = f"{label}: {exc}"
-        show(bad)
-
-    def follow(event):  # a preset, a link or the slider moved the value: show it, clear the message
-        state["setting"] = True
-        try:
-            widget.value = event.new
-        finally:
-            state["setting"] = False
-        show("")
+        if len(box) == 1 and bad:
+            box.append(pn.pane.HTML("", css_classes=["amra-msg"], sizing_mode="stretch_width",
+                                    styles={"color": "#b71c1c", "font-size": "90%"}, margin=(0, 10, 4, 10)))
+        if len(box) > 1:
+            box[1].param.update(object=html.escape(bad), visible=bool(bad))
 
     widget.param.watch(typed, "value")
-    controls.param.watch(follow, name)
+    # a preset, a link or the slider moved the value: the input shows it, and its message goes
+    controls.param.watch(lambda e: setattr(widget, "value", e.new), name)
     return box
+
+
+def gj_slider(controls: param.Parameterized) -> pn.widgets.FloatSlider:
+    """GJ on a log10 scale, labelled in N m²/rad, a second view of ``controls.gj_nm2``. No echo: a
+    handle moved from the server changes ``value`` only, and only a release in the browser changes
+    ``value_throttled``, which sets GJ."""
+    lo, hi = (math.log10(b) for b in GJ_BOUNDS)
+    s = pn.widgets.FloatSlider(name="GJ (log scale) [N m²/rad]", start=lo, end=hi, step=0.005,
+                               value=math.log10(controls.gj_nm2), sizing_mode="stretch_width",
+                               format=CustomJSTickFormatter(code="return (10 ** tick).toPrecision(3)"),
+                               css_classes=["amra-gj-slider"])
+
+    def released(event):
+        controls.gj_nm2 = min(max(float(f"{10 ** event.new:.4g}"), GJ_BOUNDS[0]), GJ_BOUNDS[1])
+    s.param.watch(released, "value_throttled")
+    controls.param.watch(lambda e: setattr(s, "value", math.log10(e.new)), "gj_nm2")
+    return s

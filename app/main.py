@@ -10,11 +10,11 @@ import holoviews as hv
 import panel as pn
 
 from app.app import TITLE, Dashboard
+from app.controls import apply_session_query, sync_url
 from app.server.map_jobs import get_registry
 from app.server.pool import get_run_pool
 from app.server.settings import ServerSettings
 from app.tuning.offline_styles import serve_resources_locally
-from app.url_sync import apply_session_query, sync_url
 
 __all__ = ["TITLE", "create_app"]
 

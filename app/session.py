@@ -2,11 +2,11 @@
 
 The run thread trims the case (in the run process pool: the trim holds the GIL), advances the
 :class:`~amra_core.simulation.Simulation` in chunks paced to the playback speed, applies live
-GJ/EA/CG changes between chunks (``set_parameters``: the run continues from its state) and posts
-typed events (:mod:`app.events`). Views subscribe to the event types they draw; :meth:`deliver`
-hands them over on the event loop at most :data:`DELIVERY_PERIOD_S` apart, consecutive rows
-joined. :meth:`start`, :meth:`stop` and :meth:`close` only signal, never wait for a thread; a
-replaced run's late events are dropped by run id.
+GJ/EA/CG changes between chunks (the run continues from its state) and posts typed events
+(:mod:`app.events`). Views subscribe to the types they draw; :meth:`Session.deliver` hands them
+over on the event loop at most :data:`DELIVERY_PERIOD_S` apart. :meth:`Session.start`,
+:meth:`~Session.stop` and :meth:`~Session.close` only signal, never wait for a thread; a replaced
+run's late events are dropped by run id.
 """
 from __future__ import annotations
 
@@ -15,22 +15,64 @@ import queue
 import threading
 import time
 from collections import defaultdict
-from typing import Optional
+from typing import Callable, Optional
 
 import numpy as np
+import panel as pn
+from panel.io.state import set_curdoc
 
+from amra_core.model import Y_OMEGA
 from amra_core.pose import rotor_pose
 from amra_core.scenario import Scenario, apply_change
 from amra_core.simulation import Case, Simulation
 
 from .events import Applied, Disc, Finished, Notice, Pose, Rows, RunStatus, Started, VerdictNews
-from .throttle import Throttle
 
 TICK_S = 0.06  #: wall-clock period of a chunk [s]
 DELIVERY_PERIOD_S = 0.1  #: shortest interval between deliveries to the views [s]: 10 updates/s
 TRIM_PROGRESS_PERIOD_S = 0.5  #: period of the trim's progress line [s]
-VERDICT_PERIOD_S = 1.0  #: wall-clock period of the "so far" verdict and the disc during a run [s]
+VIEWS_PERIOD_S = 1.0  #: wall-clock period of the clock, the "so far" verdict and the disc during a run [s]
 log = logging.getLogger("amra.session")
+
+
+class Throttle:
+    """The app's one rate limiter: ``fn`` runs on the session's event loop soon after a
+    :meth:`kick` (from any thread; kicks during a wait coalesce), at most once per period, and
+    never while nobody kicks. Without a served document a kick only marks the work as due, and
+    :meth:`run_due` runs it in the caller's thread (tests, scripts)."""
+
+    def __init__(self, fn: Callable[[], None], period_s: float, doc=None):
+        self.fn, self.period_s, self.doc = fn, float(period_s), doc
+        self._lock = threading.Lock()
+        self._due, self._last, self.closed = False, -1e9, False
+
+    def kick(self) -> None:
+        with self._lock:
+            if self._due or self.closed:
+                return
+            self._due = True
+        if self.doc is not None:  # pn.state.execute: a next-tick callback, the document locked
+            with set_curdoc(self.doc):
+                pn.state.execute(self._arm, schedule=True)
+
+    def _arm(self) -> None:  # on the event loop
+        wait_s = self._last + self.period_s - time.monotonic()
+        if wait_s > 0:
+            self.doc.add_timeout_callback(self._timed, int(1000 * wait_s) + 1)
+        else:
+            self.run_due()
+
+    def _timed(self) -> None:  # a Bokeh timeout callback: on the loop, document locked
+        with set_curdoc(self.doc):
+            self.run_due()
+
+    def run_due(self) -> None:
+        """Run the function if a kick asked for it."""
+        with self._lock:
+            if not self._due or self.closed:
+                return
+            self._due, self._last = False, time.monotonic()
+        self.fn()
 
 
 def new_simulation(case: Case) -> Simulation:
@@ -41,9 +83,11 @@ def new_simulation(case: Case) -> Simulation:
 
 class Session:
     def __init__(self, doc=None, run_pool=None):
+        self.doc = doc if doc is not None and doc.session_context is not None else None
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._handlers: dict = defaultdict(list)
-        self.delivery = Throttle(self.deliver, DELIVERY_PERIOD_S, doc)
+        self._throttles: list = []
+        self.delivery = self.throttle(self.deliver, DELIVERY_PERIOD_S)
         self.run_pool = run_pool
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -54,6 +98,27 @@ class Session:
         self.sim: Optional[Simulation] = None
         self._live_since: Optional[tuple] = None  #: (GJ, perf_counter) of a live change not yet delivered
         self.live_latencies_s: list = []  #: live change received -> first rows with it sent [s]
+
+    # ------------------------------------------------------------------ the event loop
+    def throttle(self, fn: Callable[[], None], period_s: float) -> Throttle:
+        """A :class:`Throttle` on this session's loop, run by :meth:`pump` and closed with the session."""
+        self._throttles.append(t := Throttle(fn, period_s, self.doc))
+        return t
+
+    def pump(self) -> None:
+        """Run whatever is due now, in the caller's thread (tests and scripts without a server)."""
+        for t in self._throttles:
+            t.run_due()
+
+    def soon(self, fn: Callable[[], None]) -> None:
+        """Run ``fn`` on the event loop with the document locked (``pn.state.execute``), or at once
+        without a served document: Panel hands a click to its watchers without the lock, and the
+        plots' Bokeh sources may change only with it held."""
+        if self.doc is None:
+            fn()
+        else:
+            with set_curdoc(self.doc):
+                pn.state.execute(fn, schedule=True)
 
     # ------------------------------------------------------------------ news
     def subscribe(self, event_type, handler) -> None:
@@ -77,19 +142,20 @@ class Session:
                 continue  # from a run that was replaced
             if isinstance(ev, Rows) and (not rows or rows[-1].gj_nm2 == ev.gj_nm2):
                 rows.append(ev)
-                continue
-            if isinstance(ev, Pose):  # only the latest shape is drawn
+            elif isinstance(ev, Pose):
                 pose = ev
-                continue
-            self._dispatch_rows(rows)
-            rows = [ev] if isinstance(ev, Rows) else []
-            if not isinstance(ev, Rows):
-                for handler in self._handlers[type(ev)]:
-                    handler(ev)
+            else:
+                self._dispatch_rows(rows)
+                rows = [ev] if isinstance(ev, Rows) else []
+                if not rows:
+                    self._dispatch(ev)
         self._dispatch_rows(rows)
         if pose is not None:
-            for handler in self._handlers[Pose]:
-                handler(pose)
+            self._dispatch(pose)
+
+    def _dispatch(self, ev) -> None:
+        for handler in self._handlers[type(ev)]:
+            handler(ev)
 
     def _dispatch_rows(self, rows: list) -> None:
         rows = [r for r in rows if len(r.rows)]  # a chunk shorter than the output step has none
@@ -97,8 +163,7 @@ class Session:
             return
         ev = rows[0] if len(rows) == 1 else Rows(rows[-1].run_id, np.concatenate([r.rows for r in rows]),
                                                  rows[-1].gj_nm2, rows[-1].t_s)
-        for handler in self._handlers[Rows]:
-            handler(ev)
+        self._dispatch(ev)
         if self._live_since is not None and abs(ev.gj_nm2 - self._live_since[0]) <= 1e-9 * self._live_since[0]:
             self.live_latencies_s.append(time.perf_counter() - self._live_since[1])
             self._live_since = None
@@ -136,7 +201,8 @@ class Session:
 
     def close(self) -> None:
         self.stop()
-        self.delivery.close()
+        for t in self._throttles:
+            t.closed = True
 
     def set_live(self, **values) -> None:
         """Queue GJ [N m²/rad], EA and CG [chord fractions] for the running Simulation."""
@@ -150,11 +216,6 @@ class Session:
             self._speed = float(speed)
 
     # ------------------------------------------------------------------ the run thread
-    def _take(self):
-        with self._lock:
-            pend, self._pending = self._pending, {}
-            return pend, self._speed
-
     def _loop(self, case: Case, changes: tuple, run_id: int, stop: threading.Event) -> None:
         post = self.post
         post(RunStatus(run_id, "trimming", "finding the trimmed autorotation ..."))
@@ -185,7 +246,8 @@ class Session:
         next_tick = last_views = time.perf_counter()
         try:
             while not stop.is_set() and sim.status == "running" and sim.t < t_end - 1e-9:
-                pend, speed = self._take()
+                with self._lock:
+                    pend, self._pending, speed = self._pending, {}, self._speed
                 if pend:
                     try:
                         sim.set_parameters(**pend)
@@ -202,8 +264,9 @@ class Session:
                     gj = float(np.mean(sim.case.rotor.stations.gj_nm2))
                     post(Applied(run_id, {"gj_nm2": change.gj_nm2, "scripted": True}, sim.t))
                 post(Pose(run_id, rotor_pose(sim.model, sim.y), sim.t))
-                if time.perf_counter() - last_views >= VERDICT_PERIOD_S:
+                if time.perf_counter() - last_views >= VIEWS_PERIOD_S:
                     last_views = time.perf_counter()
+                    post(RunStatus(run_id, "running", f"running, t = {sim.t:.2f} s", float(sim.y[Y_OMEGA])))
                     self._post_views(sim, run_id, final=False)
                 next_tick += TICK_S
                 delay = next_tick - time.perf_counter()

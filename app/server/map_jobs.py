@@ -89,7 +89,7 @@ class MapJob:
                 reg.changed()  # every job: its end frees the slot, so queued jobs move up
 
     def _changed(self) -> None:
-        """Tell the subscribers (each throttles its own redraws, app.throttle)."""
+        """Tell the subscribers (each throttles its own redraws: app.session.Throttle)."""
         for callback in list(self.subscribers.values()):
             callback()
 

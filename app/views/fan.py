@@ -1,6 +1,6 @@
 """Classroom view: the fan (Southwell/Campbell) plot of the tracked in-vacuo modes against rotor
 speed (paper Figs 6-7), per-rev lines dashed, the current rotor speed marked. From
-``amra_core.modes.fan_plot``."""
+``amra_core.modes.fan_plot``; the marker moves once a second during a run."""
 from __future__ import annotations
 
 import holoviews as hv
@@ -8,38 +8,26 @@ import numpy as np
 import panel as pn
 from holoviews.streams import Pipe, Stream
 
-from amra_core.simulation import COL
-
 from ..compute import FAN_OMEGA_MAX as OMEGA_MAX
-from ..events import Fan, Rows
-from ..throttle import Throttle
+from ..events import Fan, RunStatus
 
 OMEGA_DIM = hv.Dimension("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
 F_DIM = hv.Dimension("frequency_hz", label="Natural frequency", unit="Hz")
-
-MARK_PERIOD_S = 1.0  #: wall-clock period of the current-speed marker's moves [s]
 
 Omega = Stream.define("Omega", omega=0.0)
 
 
 class FanView(pn.viewable.Viewer):
-    def __init__(self, session, doc=None, **params):
+    def __init__(self, session, **params):
         super().__init__(**params)
         self.pipe = Pipe(data={})
         self.omega = Omega()
-        self._omega_now = 0.0
-        self.marker = Throttle(self._move, MARK_PERIOD_S, doc)  # each move re-renders the plot
         session.subscribe(Fan, lambda ev: self.pipe.send(ev.result))
-        session.subscribe(Rows, self._rows)
+        session.subscribe(RunStatus, self._move)  # once a second while a run runs
 
-    def _rows(self, ev: Rows) -> None:
-        if len(ev.rows):
-            self._omega_now = float(ev.rows[-1, COL["omega_rad_s"]])
-            self.marker.kick()
-
-    def _move(self) -> None:
-        if abs(self._omega_now - self.omega.omega) > 0.05:
-            self.omega.event(omega=self._omega_now)
+    def _move(self, ev: RunStatus) -> None:
+        if ev.omega_rad_s is not None and abs(ev.omega_rad_s - self.omega.omega) > 0.05:
+            self.omega.event(omega=ev.omega_rad_s)  # each move re-renders the plot
 
     def _plot(self, data):
         layers = []

@@ -73,10 +73,5 @@ def help_markdown(controls=None) -> str:
     return "\n\n".join(parts)
 
 
-class HelpView(pn.viewable.Viewer):
-    def __init__(self, controls=None, **params):
-        super().__init__(**params)
-        self.text = help_markdown(controls)
-
-    def __panel__(self):
-        return pn.pane.Markdown(self.text, sizing_mode="stretch_width", name="help", css_classes=["amra-help"])
+def help_pane(controls=None) -> pn.pane.Markdown:
+    return pn.pane.Markdown(help_markdown(controls), sizing_mode="stretch_width", name="help", css_classes=["amra-help"])

@@ -1,7 +1,7 @@
 """The fidelity ladder (the paper's central comparison): the same case at rigid, fem-torsion and
-fem-coupled, run side by side (unpaced, in the analysis process: :func:`app.analysis.run_ladder`)
-and overlaid with a legend, with each run's verdict; and the previous run overlaid (dashed) on the
-one that just finished."""
+fem-coupled, run side by side (unpaced, in the analysis pool: :func:`app.compute.run_ladder`) and
+overlaid, with each run's verdict; and the previous run overlaid (dashed) on the one that just
+finished."""
 from __future__ import annotations
 
 import holoviews as hv
@@ -12,17 +12,17 @@ from holoviews.streams import Pipe
 
 from amra_core.shapes import FIDELITIES
 
-from ..compute import LADDER_POINTS as MAX_POINTS
+from ..compute import ladder_curves
 from ..events import Finished, Ladder
-from ..live import UNITS, columns_from_rows
+from ..live import UNITS
 
 DIMS = {c: hv.Dimension(c, label=name, unit=unit) for c, (name, unit) in UNITS.items()}
-
 COLOURS = {"rigid": "#1565c0", "fem-torsion": "#ef6c00", "fem-coupled": "#6a1b9a", "previous run": "#9e9e9e",
            "last run": "#1f77b4"}
-
-
 COMPARED = ("previous run", "last run")
+#: (curve of app.compute.ladder_curves, y dimension, title) of each plot
+PLOTS = (("omega", DIMS["omega_rad_s"], "Rotor speed"), ("teeter_deg", DIMS["teeter_deg"], "Teeter"),
+         ("twist_deg", DIMS["twist0_deg"], "Tip twist (blade 0)"))
 
 
 class LadderView(pn.viewable.Viewer):
@@ -33,26 +33,19 @@ class LadderView(pn.viewable.Viewer):
         self.info = pn.pane.Markdown("Press **Run fidelity ladder** to run the current case at the three "
                                      "fidelities.", name="ladder-info")
         self.compare_pipe = Pipe(data={})
-        self.previous = None  #: the last finished run, as a frame of app.live.COLUMNS
+        self.previous = None  #: the last finished run's history
         session.subscribe(Ladder, lambda ev: self.show(ev.result))
         session.subscribe(Finished, self._finished)
 
     def _finished(self, ev: Finished) -> None:
         if len(ev.history):
-            frame = pd.DataFrame(columns_from_rows(ev.history, float("nan")))
-            self.compare(self.previous, frame)
-            self.previous = frame
+            self.compare(self.previous, ev.history)
+            self.previous = ev.history
 
     def compare(self, previous, current) -> None:
-        """Overlay the previous run on the one that just finished (frames of :data:`app.live.COLUMNS`)."""
-        runs = {}
-        for label, f in (("previous run", previous), ("last run", current)):
-            if f is not None and len(f):
-                idx = np.linspace(0, len(f) - 1, min(MAX_POINTS, len(f))).astype(int)
-                g = f.iloc[idx]
-                runs[label] = {"t": g["t_s"].to_numpy(), "omega": g["omega_rad_s"].to_numpy(),
-                               "teeter_deg": g["teeter_deg"].to_numpy(), "twist_deg": g["twist0_deg"].to_numpy()}
-        self.compare_pipe.send(runs)
+        """Overlay the previous run on the one that just finished (histories, ``HISTORY_COLUMNS``)."""
+        self.compare_pipe.send({label: ladder_curves(h) for label, h in zip(COMPARED, (previous, current))
+                                if h is not None and len(h)})
 
     def show(self, result: dict) -> None:
         self.info.object = "Fidelity ladder: the current case at the three fidelities."
@@ -73,18 +66,15 @@ class LadderView(pn.viewable.Viewer):
                                        legend_position="top_left", framewise=True)
 
     def __panel__(self):
-        specs = (("omega", DIMS["omega_rad_s"], "Rotor speed by fidelity"),
-                 ("teeter_deg", DIMS["teeter_deg"], "Teeter by fidelity"),
-                 ("twist_deg", DIMS["twist0_deg"], "Tip twist (blade 0) by fidelity"))
-        plots = [pn.pane.HoloViews(hv.DynamicMap(lambda data, s=s: self._plot(data, *s), streams=[self.pipe]),
-                                   sizing_mode="stretch_width") for s in specs]
-        compare = [pn.pane.HoloViews(hv.DynamicMap(lambda data, s=s: self._plot(data, s[0], s[1], s[2].replace(
-            "by fidelity", "previous vs last run"), COMPARED), streams=[self.compare_pipe]),
-            sizing_mode="stretch_width") for s in specs]
+        def plots(pipe, labels, what):
+            return pn.Row(*[pn.pane.HoloViews(hv.DynamicMap(
+                lambda data, p=p: self._plot(data, p[0], p[1], f"{p[2]} {what}", labels), streams=[pipe]),
+                sizing_mode="stretch_width") for p in PLOTS])
         return pn.Column(
-            pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"), pn.Row(*compare),
+            pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"),
+            plots(self.compare_pipe, COMPARED, "previous vs last run"),
             pn.pane.Markdown("### Fidelity ladder: the same case at the three fidelities"),
-            self.info, self.table, pn.Row(*plots), sizing_mode="stretch_width")
+            self.info, self.table, plots(self.pipe, FIDELITIES, "by fidelity"), sizing_mode="stretch_width")
 
 
 def _num(x, unit: str = "") -> str:
@@ -96,7 +86,3 @@ def verdict_table(rows) -> pd.DataFrame:
     return pd.DataFrame([(fid, verdict, _num(g), _num(f), _num(c), text) for fid, verdict, g, f, c, text in rows],
                         columns=["fidelity", "verdict", "growth rate [1/s]", "frequency [Hz]", "collapse time [s]",
                                  "explanation"])
-
-
-def ladder_cases(controls, uploaded) -> dict:
-    return {fid: controls.case(uploaded, fidelity=fid) for fid in FIDELITIES}

@@ -1,16 +1,10 @@
 """The boundary map (paper Fig. 14) for the current EA, μ, fidelity and aerodynamics, filling in.
 
-Cells come from the session's subscription to the server-wide :class:`app.server.map_jobs.MapJob`
-(stored cells at once, new ones as they finish): the job calls back on every change, and the view
-redraws at most every :data:`REDRAW_S` seconds (:class:`app.throttle.Throttle`); nothing runs
-while the map is idle. A progress bar counts the cells. The current (CG, GJ) is a star; the
-critical-GJ lines of every fidelity computed so far for the same case are overlaid with a legend.
-Clicking the map loads the nearest cell's (CG, GJ) into the controls.
-
-The plot is a plain Bokeh figure on three data sources (cells, boundary lines, marker), not a
-HoloViews overlay: a redraw streams the new cells into their source. The boundary lines are
-drawn by :meth:`MapView.draw_boundaries`, the one place to change when the map shows more
-boundaries per fidelity.
+The view follows the server-wide :class:`app.server.map_jobs.MapJob` of the case (stored cells at
+once, new ones as they finish), which calls back on every change; the view redraws at most every
+:data:`REDRAW_S` seconds, streaming the new cells into a plain Bokeh figure. The current (CG, GJ)
+is a star; the fold and flutter lines of every fidelity computed so far are overlaid. Clicking
+the map loads the nearest cell's (CG, GJ) into the controls.
 """
 from __future__ import annotations
 
@@ -20,7 +14,6 @@ import io
 import math
 
 import numpy as np
-import pandas as pd
 import panel as pn
 from bokeh.events import Tap
 from bokeh.models import CDSView, ColumnDataSource, GroupFilter, HoverTool, Legend, LegendItem, Range1d
@@ -29,8 +22,7 @@ from bokeh.plotting import figure
 from amra_core.boundary import MapSpec, cell_class
 from amra_core.stability import CellResult
 
-from ..throttle import Throttle
-from .status import Text
+from .status import text
 
 CG_LABEL = "CG [% chord]"
 GJ_LABEL = "GJ [N m²/rad]"
@@ -42,21 +34,15 @@ REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the map [s]
 BUSY_RETRY_MS = 5000  #: a map refused as "server busy" is asked for again after this [ms]
 
 
-CELL_COLUMNS = ("cg_pct", "gj_nm2", "class", "verdict", "growth_rate_per_s", "colour")
-
-
-def cells_frame(cells) -> pd.DataFrame:
-    rows = [(100.0 * c.cg, c.gj_nm2, cell_class(c), c.verdict,
-             np.nan if c.growth_rate_per_s is None else c.growth_rate_per_s) for c in cells]
-    frame = pd.DataFrame(rows, columns=list(CELL_COLUMNS[:-1]))
-    frame["colour"] = [CLASS_COLOURS.get(k, CLASS_COLOURS["failed"]) for k in frame["class"]]
-    return frame
-
-
-def _columns(frame: pd.DataFrame) -> dict:
-    # text columns as lists of str: an empty (float) array as a colour column is "invalid color array"
-    return {c: [str(v) for v in frame[c]] if c in ("class", "verdict", "colour") else frame[c].to_numpy(dtype=float)
-            for c in CELL_COLUMNS}
+def cell_columns(cells) -> dict:
+    """The plot's columns of ``cells`` (text as lists of str: an empty float array as a colour column
+    is an "invalid color array")."""
+    classes = [cell_class(c) for c in cells]
+    growth = [np.nan if c.growth_rate_per_s is None else c.growth_rate_per_s for c in cells]
+    return {"cg_pct": np.array([100.0 * c.cg for c in cells], dtype=float),
+            "gj_nm2": np.array([c.gj_nm2 for c in cells], dtype=float), "class": classes,
+            "verdict": [str(c.verdict) for c in cells], "growth_rate_per_s": np.array(growth, dtype=float),
+            "colour": [CLASS_COLOURS.get(k, CLASS_COLOURS["failed"]) for k in classes]}
 
 
 def nearest_cell(cells, cg_pct: float, gj: float):
@@ -133,26 +119,22 @@ def map_csv(cells, spec=None, complete: bool = True) -> io.StringIO:
 
 
 class MapView(pn.viewable.Viewer):
-    def __init__(self, registry, who, on_pick, doc=None, **params):
+    def __init__(self, session, registry, who, on_pick, **params):
         super().__init__(**params)
-        self.doc = doc if doc is not None and doc.session_context is not None else None
-        self.redraw = Throttle(self.poll, REDRAW_S, doc)
-        self.registry = registry
-        self.who = who
-        self.on_pick = on_pick
+        self.doc = session.doc
+        self.redraw = session.throttle(self.poll, REDRAW_S)
+        self.registry, self.who, self.on_pick = registry, who, on_pick
         self.job = None
-        self.seen = 0
         self.cells: list = []
-        self.cells_source = ColumnDataSource(_columns(cells_frame([])))
+        self.cells_source = ColumnDataSource(cell_columns([]))
         self.fold_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
         self.flutter_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
         self.band_sources = {k: ColumnDataSource({"left": [], "right": [], "bottom": [], "top": [], "text": []})
                              for k in ("strong", "weak")}
         self.marker_source = ColumnDataSource({"cg_pct": [40.0], "gj_nm2": [1500.0]})
-        self._drawn = 0  #: cells in the plot's source
         self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", label="map-progress",
                                                bar_color="info")
-        self.status = Text("Map: waiting ...", name="map-status", css_class="amra-map-status")
+        self.status = text("Map: waiting ...", "amra-map-status")
         self._lines_key = None
         self.eta = Eta()
         self.ea_source = ColumnDataSource({"x": [32.0]})
@@ -165,12 +147,10 @@ class MapView(pn.viewable.Viewer):
             return
         self.release()
         self.job = self.registry.subscribe(spec, self.who, self.redraw.kick)
-        self.seen = 0
-        self.cells = []
-        self.eta = Eta()
+        self.cells, self.eta = [], Eta()
+        self.cells_source.data = cell_columns([])
         self.ea_source.data = {"x": [100.0 * spec.ea]}
         self.sens_source.data = {"cg_pct": [], "lo": [], "hi": [], "text": []}  # another case's bands
-        self._draw(reset=True)
         self.progress.value = 0
         if self.job.state == "busy" and self.doc is not None:  # the queue was full: ask again later
             job = self.job
@@ -186,11 +166,10 @@ class MapView(pn.viewable.Viewer):
         """Pull new cells and progress from the job and draw them (event loop)."""
         if self.job is None:
             return
-        snap = self.job.snapshot(self.seen)
-        if snap["cells"]:
+        snap = self.job.snapshot(len(self.cells))
+        if snap["cells"]:  # cells only arrive, in order, until follow() starts another map
             self.cells.extend(snap["cells"])
-            self.seen = snap["n"]
-            self._draw()
+            self.cells_source.stream(cell_columns(snap["cells"]))
         total = max(snap["total"], 1)
         pct = 100 if snap["state"] == "done" else min(99, int(100 * snap["n"] / total))
         eta = self.eta.update(snap["n"] - snap["cached"], total - snap["n"], snap["state"] == "running")
@@ -201,11 +180,11 @@ class MapView(pn.viewable.Viewer):
         state = {"queued": queued, "running": "computing", "done": "complete",
                  "cancelled": "cancelled", "failed": f"failed: {snap['error']}",
                  "busy": snap["error"]}[snap["state"]]
-        text = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
+        line = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
                 f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}{eta}")
-        if snap.get("notice"):  # the store could not be used or written (app.server.queue.open_store)
-            text += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
-        self.status.object = text  # (a same-text set sends nothing)
+        if snap.get("notice"):  # the store could not be used or written (app.server.map_jobs.open_store)
+            line += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
+        self.status.object = line
         self.draw_boundaries(self.registry.related(spec))
 
     def draw_boundaries(self, related: dict) -> None:
@@ -250,15 +229,6 @@ class MapView(pn.viewable.Viewer):
 
     def mark(self, cg_pct: float, gj: float) -> None:
         self.marker_source.data = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]}
-
-    def _draw(self, reset: bool = False) -> None:
-        """Bring the plotted cells up to :attr:`cells`: new ones are streamed (cells only arrive,
-        in order, until :meth:`follow` starts another map, which empties the plot)."""
-        if reset or self._drawn > len(self.cells):
-            self.cells_source.data = _columns(cells_frame(self.cells))
-        elif len(self.cells) > self._drawn:
-            self.cells_source.stream(_columns(cells_frame(self.cells[self._drawn:])))
-        self._drawn = len(self.cells)
 
     def csv(self) -> io.StringIO:
         job = self.job

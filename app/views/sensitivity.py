@@ -1,12 +1,8 @@
-"""Which conclusions of the map rest on guesses (issue 21 §6): the boundaries' sensitivity to every
-estimated rotor value, in the map tab.
-
-A button walks the current CG column again with each estimate (blade incidence, aircraft mass, hub
-inertias, torsional inertia, radius, chord, structural damping, root cut-out) changed by -10 % and
-+10 % (:func:`app.compute.sensitivity_study`: the map's own column walk, in the analysis pool). The
-answer is a table of the fold-GJ and flutter-GJ changes, a band on the map around each boundary at
-that CG (lowest to highest over the baseline and every change, :meth:`MapView.show_sensitivity`),
-and a CSV export.
+"""Which conclusions of the map rest on guesses (issue 21 §6), in the map tab: a button walks the
+current CG column again with each estimated rotor value -10 % and +10 %
+(:func:`app.compute.sensitivity_study`, in the analysis pool); the answer is a table of the fold-
+and flutter-GJ changes, a band on the map around each boundary at that CG
+(:meth:`app.views.map.MapView.show_sensitivity`) and a CSV export.
 """
 from __future__ import annotations
 
@@ -23,7 +19,7 @@ from amra_core.export import table_csv
 
 from .. import compute
 from ..events import Sensitivity
-from .status import Text
+from .status import text
 
 TABLE_COLUMNS = ("estimate", "change_pct", "value", "unit", "fold_gj_nm2", "d_fold_gj_nm2", "flutter_gj_nm2",
                  "d_flutter_gj_nm2", "note")
@@ -39,13 +35,6 @@ def _gj(g) -> str:
 
 def _band(b) -> str:
     return "—" if b is None else f"{_gj(b[0])} to {_gj(b[1])} N m²/rad"
-
-
-def sensitivity_frame(result: dict) -> pd.DataFrame:
-    """One row per perturbation, in the page's units (changes in %)."""
-    rows = [(r["label"], 100.0 * r["change"], r["value"], r["unit"], r["fold_gj_nm2"], r["d_fold_gj_nm2"],
-             r["flutter_gj_nm2"], r["d_flutter_gj_nm2"], r["note"]) for r in result["rows"]]
-    return pd.DataFrame(rows, columns=list(TABLE_COLUMNS))
 
 
 def display_frame(result: dict) -> pd.DataFrame:
@@ -82,9 +71,8 @@ class SensitivityView(pn.viewable.Viewer):
                                         css_classes=["amra-sensitivity"], sizing_mode="stretch_width")
         self.busy = pn.indicators.Progress(value=-1, active=False, visible=False, sizing_mode="stretch_width",
                                            bar_color="info")
-        self.info = Text("Which conclusions rest on estimates? The button walks this CG column again with each "
-                         "estimated rotor value 10 % lower and 10 % higher.", name="sensitivity-info",
-                         css_class="amra-sensitivity-info")
+        self.info = text("Which conclusions rest on estimates? The button walks this CG column again with each "
+                         "estimated rotor value 10 % lower and 10 % higher.", "amra-sensitivity-info")
         self.table = pn.pane.DataFrame(None, index=False, sizing_mode="stretch_width", name="sensitivity-table")
         self.download = pn.widgets.FileDownload(callback=self.csv, filename="amra-sensitivity.csv",
                                                 label="Sensitivity table (CSV)", disabled=True,
@@ -117,7 +105,9 @@ class SensitivityView(pn.viewable.Viewer):
         r = self.result or {"rows": []}
         meta = {k: r.get(k) for k in ("rotor", "fidelity", "rigid_spring", "aero", "mu", "ea", "cg", "step",
                                       "gj_min_nm2", "gj_max_nm2", "rel_tol")}
-        rows = [[_cell(v) for v in row] for row in sensitivity_frame(r).itertuples(index=False)] if r["rows"] else []
+        rows = [[_cell(v) for v in (x["label"], 100.0 * x["change"], x["value"], x["unit"], x["fold_gj_nm2"],
+                                    x["d_fold_gj_nm2"], x["flutter_gj_nm2"], x["d_flutter_gj_nm2"], x["note"])]
+                for x in r["rows"]]  # one per perturbation, changes in %
         return io.StringIO(table_csv(TABLE_COLUMNS, rows, meta))
 
     def __panel__(self):

@@ -1,21 +1,13 @@
 """What the run is doing: the verdict card (class of the run with growth rate, frequency and
-collapse time), the run status line with its clock, and the note on live changes.
-
-The texts are plain Bokeh ``Div``s whose ``text`` alone changes (:class:`Text`): the cheapest
-update a page can get, sent as one property change. They are changed only in the session's
-deliveries (event loop, document locked); the clock at most :data:`CLOCK_PERIOD_S` apart.
-"""
+collapse time), its badge for the presentation header, the run status line and the note on live
+changes. They change only in the session's deliveries (event loop, document locked)."""
 from __future__ import annotations
 
 import html
 
 import panel as pn
-from bokeh.models import Div
 
-from ..events import Applied, Rows, RunStatus, Started, VerdictNews
-from ..throttle import Throttle
-
-CLOCK_PERIOD_S = 1.0  #: shortest interval between updates of the run clock [s]
+from ..events import Applied, RunStatus, Started, VerdictNews
 
 COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "divergence": "#ef6c00", "overspeed": "#6a1b9a",
            "no-autorotation": "#5d4037", "numerical-failure": "#424242"}
@@ -54,27 +46,6 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
             f"<div>{html.escape(verdict.explanation)}</div><table>{table}</table>{note}</div>")
 
 
-class Text(pn.viewable.Viewer):
-    """An HTML snippet in a Bokeh ``Div``; ``object`` reads and sets it (a same-text set sends nothing)."""
-
-    def __init__(self, html: str = "", name: str = "", css_class: str = "", **params):
-        super().__init__(**params)
-        self.div = Div(text=html, sizing_mode="stretch_width", name=name or None,
-                       css_classes=[css_class] if css_class else [])
-
-    @property
-    def object(self) -> str:
-        return self.div.text
-
-    @object.setter
-    def object(self, html_text: str) -> None:
-        if html_text != self.div.text:
-            self.div.text = html_text
-
-    def __panel__(self):
-        return pn.pane.Bokeh(self.div, sizing_mode="stretch_width")
-
-
 def badge_html(verdict, final: bool) -> str:
     """The verdict for the header in presentation mode (on its dark background): the verdict word, and
     the rotor-speed collapse on a second line (one line overflowed a 1280 px projector's header)."""
@@ -90,38 +61,27 @@ def run_html(text: str) -> str:
     return f"<b>Run:</b> {html.escape(text)}"
 
 
+def text(html_text: str = "", css_class: str = "", **kw) -> pn.pane.HTML:
+    """A line of HTML that changes in place (a same-text set sends nothing)."""
+    return pn.pane.HTML(html_text, css_classes=[css_class] if css_class else [], **{"sizing_mode": "stretch_width", **kw})
+
+
 class StatusView(pn.viewable.Viewer):
     """Verdict card, run status and live-change note of one session."""
 
-    def __init__(self, session, notify, doc=None, **params):
+    def __init__(self, session, notify, **params):
         super().__init__(**params)
-        self.card = Text(verdict_html(None, False), name="verdict")
-        self.badge = Text(badge_html(None, False), name="verdict-badge", css_class="amra-badge")
-        self.run = Text(run_html("idle"), name="run-status", css_class="amra-run-status")
-        self.note = Text("", name="live-note", css_class="amra-live-note")
+        self.card = text(verdict_html(None, False))
+        self.badge = text(badge_html(None, False), "amra-badge", width=300, sizing_mode=None)
+        self.run = text(run_html("idle"), "amra-run-status")
+        self.note = text("", "amra-live-note")
         self.verdict = None
         self.notify = notify
-        self._t_s = 0.0
-        self._running = False
-        self.clock = Throttle(self._tick, CLOCK_PERIOD_S, doc)
-        session.subscribe(RunStatus, self._status)
-        session.subscribe(Rows, self._rows)
+        self.case = ""  #: the case of the run the card speaks of (set when a run starts)
+        session.subscribe(RunStatus, lambda ev: setattr(self.run, "object", run_html(ev.text)))
         session.subscribe(Started, self._started)
         session.subscribe(VerdictNews, lambda ev: self.show(ev.verdict, ev.final, ev.status, ev.start_note))
-        self.case = ""  #: the case of the run the card speaks of (set when a run starts)
         session.subscribe(Applied, self._applied)
-
-    def _status(self, ev: RunStatus) -> None:
-        self._running = ev.state == "running"
-        self.run.object = run_html(ev.text)
-
-    def _tick(self) -> None:
-        if self._running:
-            self.run.object = run_html(f"running, t = {self._t_s:.2f} s")
-
-    def _rows(self, ev: Rows) -> None:
-        self._t_s = ev.t_s
-        self.clock.kick()
 
     def _started(self, ev: Started) -> None:
         self.show(None, False)
@@ -129,11 +89,8 @@ class StatusView(pn.viewable.Viewer):
             self.notify(f"no trim exists for this case: {ev.start_note}", "warning")
 
     def _applied(self, ev: Applied) -> None:
-        v = ev.values
-        parts = [f"GJ {v['gj_nm2']:.4g} N m²/rad"] if v.get("gj_nm2") is not None else []
-        parts += [f"{n} {100 * v[k]:.3g} %" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if v.get(k) is not None]
-        how = "softened as scripted" if v.get("scripted") else "applied live"
-        self.note.object = f"{how} at t = {ev.t_s:.2f} s: {', '.join(parts)}"
+        how = "softened as scripted" if ev.values.get("scripted") else "applied live"
+        self.note.object = f"{how} at t = {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict

@@ -8,7 +8,7 @@ import pytest
 from amra_core.flight import SettingsError
 from amra_core.rotor_io import load_preset
 from app.controls import UPLOADED, Controls
-from app.presets import PRESETS
+from app.controls import PRESETS
 from app.server.settings import ServerSettings
 from app.server.settings import SettingsError as EnvError
 

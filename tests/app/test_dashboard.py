@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from amra_core.simulation import HISTORY_COLUMNS
-from app.presets import PRESETS
+from app.controls import PRESETS
 
 
 def pump_until(d, pred, wait, timeout_s=60, what="condition"):
@@ -196,7 +196,7 @@ def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
 
 def test_the_gj_slider_and_input_are_two_views_of_one_parameter(dash):
     import math
-    from app.controls import gj_slider
+    from app.inputs import gj_slider
     slider = gj_slider(dash.controls)
     dash.controls.gj_nm2 = 420.0
     assert slider.value == pytest.approx(math.log10(420.0)) and dash.controls.gj_nm2 == 420.0  # no echo

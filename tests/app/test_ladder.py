@@ -5,9 +5,8 @@ from __future__ import annotations
 
 import holoviews as hv
 import numpy as np
-import pandas as pd
 
-from app.live import columns_from_rows
+from amra_core.simulation import COL
 from app.session import Session
 from app.views.ladder import COMPARED, LadderView, verdict_table
 
@@ -39,10 +38,11 @@ def test_previous_vs_last_overlay_ranges_over_the_runs():
     dmap = hv.DynamicMap(lambda data: view._plot(data, "omega", hv.Dimension("omega_rad_s"), "t", COMPARED),
                          streams=[view.compare_pipe])
     plot = hv.renderer("bokeh").get_plot(dmap)
-    rows = np.zeros((50, 16))
-    rows[:, 0], rows[:, 2] = np.linspace(0, 1, 50), 33.9
-    frame = pd.DataFrame(columns_from_rows(rows, 1500.0))
-    view.compare(frame, frame.assign(omega_rad_s=frame["omega_rad_s"] - 10))
+    rows = np.zeros((50, len(COL)))
+    rows[:, COL["t_s"]], rows[:, COL["omega_rad_s"]] = np.linspace(0, 1, 50), 33.9
+    slower = rows.copy()
+    slower[:, COL["omega_rad_s"]] -= 10
+    view.compare(rows, slower)
     assert plot.state.y_range.start <= 23.9 and plot.state.y_range.end >= 33.9
 
 

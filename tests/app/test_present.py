@@ -5,7 +5,7 @@ from __future__ import annotations
 import holoviews as hv
 
 from app.live import NORMAL_HEIGHT, PRESENT_HEIGHT
-from app.url_sync import apply_query
+from app.controls import apply_query
 
 
 def test_the_toggle_switches_the_page(dash):

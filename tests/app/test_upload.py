@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from app.rotor_upload import MAX_BYTES, UploadError, parse_rotor_upload
+from app.controls import MAX_BYTES, UploadError, parse_rotor_upload
 
 ROTORS = Path(__file__).resolve().parents[2] / "assets" / "rotors"
 

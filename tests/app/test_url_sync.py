@@ -6,8 +6,8 @@ import math
 from panel.util import parse_query
 
 from app.controls import Controls
-from app.presets import PRESETS
-from app.url_sync import URL_KEYS, apply_query, query_string
+from app.controls import PRESETS
+from app.controls import URL_KEYS, apply_query, query_string
 
 
 def test_every_control_is_in_the_url():

@@ -19,8 +19,8 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from app.controls import Controls
-from app.rotor_upload import MAX_BYTES, UploadError, parse_rotor_upload
-from app.url_sync import URL_KEYS, apply_query, parse_link_query
+from app.controls import MAX_BYTES, UploadError, parse_rotor_upload
+from app.controls import URL_KEYS, apply_query, parse_link_query
 
 REPO = Path(__file__).resolve().parents[2]
 KEYS = sorted(URL_KEYS.values())

@@ -38,7 +38,7 @@ def test_protocol_client_sessions_stream_and_see_every_move(amra_server):
     # row with that GJ, and the server logged the change reaching it and its first rows going out
     log = srv.log_text()
     logged = {float(g) for g in re.findall(r"live change to GJ (\S+) N m", log)}
-    step = 0.005  # the GJ slider's (app.controls.gj_slider)
+    step = 0.005  # the GJ slider's (app.inputs.gj_slider)
     expected = {float(f"{10 ** (round((math.log10(1500 + 10 * i) + 0.13) / step) * step):.4g}") for i in range(n)}
     assert expected <= logged, (expected, logged)
     assert len(re.findall(r"page built in", log)) == n
