@@ -1,6 +1,6 @@
 """The live time histories: rotor speed, teeter, tip twist of both blades and descent rate.
 
-The session keeps every row of the run (:class:`History`); the page holds at most
+:class:`LivePlots` keeps every row of the run; the page holds at most
 :data:`MAX_POINTS` points per plot, a min/max-preserving decimation made on the server with
 tsdownsample (lowest and highest value per time bin: no peak of an oscillation is lost). New rows
 are decimated at the plot's current density and streamed (only new points travel); a plot that
@@ -53,6 +53,10 @@ def columns_from_rows(rows: np.ndarray, gj_nm2: float) -> dict:
             "descent_m_s": rows[:, COL["descent_rate_m_s"]].copy(), "gj_nm2": np.full(len(rows), float(gj_nm2))}
 
 
+def _empty(curves) -> dict:
+    return {c: np.zeros(0) for c in ("t_s", *curves, "gj_nm2")}
+
+
 def minmax_indices(t: np.ndarray, ys, n_out: int) -> np.ndarray:
     """Sorted row indices keeping each curve's min and max in about ``n_out / 2`` time bins (all rows
     if there are not more than ``n_out``)."""
@@ -67,68 +71,45 @@ def minmax_indices(t: np.ndarray, ys, n_out: int) -> np.ndarray:
     return np.unique(np.concatenate(keep))
 
 
-class History:
-    """Every row of the current run in display units, appended in chunks."""
-
-    def __init__(self):
-        self._chunks: list = []
-        self._whole: dict | None = None
-
-    def append(self, cols: dict) -> None:
-        self._chunks.append(cols)
-        self._whole = None
-
-    def clear(self) -> None:
-        self._chunks, self._whole = [], None
-
-    def columns(self) -> dict:
-        if self._whole is None:
-            self._whole = ({c: np.concatenate([k[c] for k in self._chunks]) for c in COLUMNS} if self._chunks
-                           else {c: np.zeros(0) for c in COLUMNS})
-            self._chunks = [self._whole] if self._chunks else []
-        return self._whole
-
-    def __len__(self) -> int:
-        return sum(len(k["t_s"]) for k in self._chunks)
-
-
 class LivePlots:
-    """The four live plots on one session's :class:`History` (module docstring)."""
+    """The four live plots of one session, and every row of its run (module docstring)."""
 
     def __init__(self, max_points: int = MAX_POINTS):
         self.max_points = int(max_points)
-        self.history = History()
-        self.sources = [ColumnDataSource(self._empty(curves)) for curves, _, _ in PLOTS]
+        self._chunks: list = []  #: the run's rows in display units (dicts of COLUMNS), joined when read
+        self.sources = [ColumnDataSource(_empty(curves)) for curves, _, _ in PLOTS]
         self.sources[0].name = "amra-live-omega"
         #: live and scripted changes: time [s] and what changed, drawn as a vertical line in every plot
         self.markers = ColumnDataSource({"t_s": [], "text": []}, name="amra-live-markers")
         self.zoom: tuple | None = None  #: the visible time range [s] while the user has zoomed
         self.figures_made: list = []
-        self.sent_rows = 0  #: rows of the history represented in the plots
-        self.last_sent_gj = float("nan")
         self._density = 1.0  #: points per history row of the plots (1: full resolution)
         self._counts = [0] * len(PLOTS)
 
-    @staticmethod
-    def _empty(curves) -> dict:
-        return {c: np.zeros(0) for c in ("t_s", *curves, "gj_nm2")}
+    @property
+    def sent_rows(self) -> int:
+        """Rows of the run so far (every one is represented in the plots)."""
+        return sum(len(k["t_s"]) for k in self._chunks)
+
+    def whole(self) -> dict:
+        """Every row of the run so far (the chunks joined, once)."""
+        if len(self._chunks) != 1:
+            self._chunks = [{c: np.concatenate([np.zeros(0), *(k[c] for k in self._chunks)]) for c in COLUMNS}]
+        return self._chunks[0]
 
     def clear(self) -> None:
-        self.history.clear()
-        self.zoom, self.sent_rows, self._density = None, 0, 1.0
+        self._chunks, self.zoom, self._density = [], None, 1.0
         self._counts = [0] * len(PLOTS)
         self.markers.data = {"t_s": [], "text": []}
         for src, (curves, _, _) in zip(self.sources, PLOTS):
-            src.data = self._empty(curves)
+            src.data = _empty(curves)
 
     def append(self, cols: dict) -> int:
         """Add rows (a dict of :data:`COLUMNS`) and send what the page shows of them; returns rows added."""
         n = len(cols["t_s"])
         if not n:
             return 0
-        self.history.append(cols)
-        self.last_sent_gj = float(cols["gj_nm2"][-1])
-        self.sent_rows += n
+        self._chunks.append(cols)
         if self.zoom is not None:
             return n  # the user looks at a range: it stays as it is until reset
         for i, (src, (curves, _, _)) in enumerate(zip(self.sources, PLOTS)):
@@ -154,7 +135,7 @@ class LivePlots:
 
     def _overview(self) -> None:
         """The whole run, decimated to half the limit per plot (room to stream into)."""
-        whole = self.history.columns()
+        whole = self.whole()
         n = len(whole["t_s"])
         self._density = min(1.0, self.max_points / 2 / max(n, 1))
         self._fill(whole, self.max_points // 2)
@@ -162,7 +143,7 @@ class LivePlots:
     def show_range(self, t0_s: float, t1_s: float) -> None:
         """Zoom: the rows in [t0, t1] (and a margin) at full resolution, or the whole run when the
         range covers it."""
-        whole = self.history.columns()
+        whole = self.whole()
         t = whole["t_s"]
         if not len(t) or (t0_s <= t[0] and t1_s >= t[-1]):
             self.reset()
@@ -179,7 +160,7 @@ class LivePlots:
 
     def frame(self) -> pd.DataFrame:
         """Every row of the run so far, as a frame of :data:`COLUMNS`."""
-        return pd.DataFrame(self.history.columns())
+        return pd.DataFrame(self.whole())
 
     def shown(self, plot: int = 0) -> dict:
         """What plot ``plot`` holds now (the page's copy)."""
