@@ -1,26 +1,117 @@
-"""Server-wide boundary-map jobs: one job per MapSpec however many sessions ask, bounded.
+"""Server-wide boundary-map jobs: one job per MapSpec however many sessions ask, in a fair,
+bounded queue, with a result store that a bad disk never stops.
 
 One :class:`MapRegistry` per server process (``pn.state.cache``, :func:`get_registry`).
 ``subscribe(spec, who, on_change)`` returns the running or finished job for ``spec`` (starting it
 if needed) and calls ``on_change`` from the job's thread at each change; a job nobody follows is
 cancelled (finished cells are in the SQLite store, so a later job resumes at once). At most
-``max_running`` jobs compute at a time, the others queue; finished jobs are kept (``max_jobs``).
+``max_running`` jobs compute at a time (:class:`FairSlots`); finished jobs are kept (``max_jobs``).
 """
 from __future__ import annotations
 
 import threading
 import time
-from collections import OrderedDict
+from collections import OrderedDict, deque
+from contextlib import contextmanager
 from dataclasses import replace
+from pathlib import Path
 from typing import Optional
 
 from amra_core.boundary import MapSpec, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
+from amra_core.store import CellStore
 
-from .queue import Busy, FairSlots, lower_priority_of_this_thread, open_store
+from .pool import lower_priority_of_this_thread
 from .settings import ServerSettings
 
 CACHE_KEY = "amra-map-registry"
+
+MAX_RUNNING = 1  #: map jobs computing at once per server process (each uses all map workers)
+MAX_QUEUED = 16  #: map jobs waiting at most; more are refused with "busy"
+
+
+def open_store(path, solver: str = "") -> tuple[Optional[CellStore], str]:
+    """``(store, "")``, or ``(None, notice)`` for the page when the store cannot be opened and written
+    (read-only or full file system, a directory that cannot be created): runs and maps work without
+    it. A store that fails later, while writing, is reported by the map run (``MapRun.store_error``)."""
+    p = Path(path)
+    try:
+        store = CellStore(p, solver=solver)
+    except Exception as exc:  # noqa: BLE001 - OSError, sqlite3.Error: the server serves without a store
+        reason = getattr(exc, "strerror", None) or str(exc) or type(exc).__name__
+        return None, (f"The result store {str(p)!r} cannot be used ({reason}): runs and maps work, "
+                      f"but finished map cells are not kept. Ask the operator to check the volume.")
+    return store, store.notice
+
+
+class Busy(Exception):
+    """The map queue is full; the message says how many wait."""
+
+
+class FairSlots:
+    """At most ``max_running`` map jobs compute at once; the others wait in first-come order (a plain
+    semaphore wakes waiters in no fixed order) and can tell their position; at most ``max_queued``
+    wait, and a job beyond that is refused at once (:class:`Busy`) instead of stalling. Jobs are one
+    per map specification and a session follows one map at a time, so the queue is fair across
+    sessions."""
+
+    def __init__(self, max_running: int = MAX_RUNNING, max_queued: int = MAX_QUEUED):
+        self.max_running = max_running
+        self.max_queued = max_queued
+        self._cond = threading.Condition()
+        self._running: set = set()
+        self._waiting: deque = deque()
+
+    def admit(self, who) -> None:
+        """Enter the queue (raises :class:`Busy` when it is full)."""
+        with self._cond:
+            if len(self._running) < self.max_running and not self._waiting:
+                self._running.add(who)
+                return
+            if len(self._waiting) >= self.max_queued:
+                raise Busy(f"server busy: {len(self._waiting)} maps are queued (at most {self.max_queued}); "
+                           f"try again in a few minutes")
+            self._waiting.append(who)
+
+    def position(self, who) -> int:
+        """0 when running (or not queued), else 1 for the next to run, 2, ..."""
+        with self._cond:
+            try:
+                return self._waiting.index(who) + 1
+            except ValueError:
+                return 0
+
+    @property
+    def queued(self) -> int:
+        with self._cond:
+            return len(self._waiting)
+
+    @contextmanager
+    def slot(self, who, cancel: Optional[threading.Event] = None):
+        """Wait for ``who``'s turn (after :meth:`admit`); yields True when it runs, False when
+        ``cancel`` was set while it waited."""
+        got = False
+        with self._cond:
+            if who not in self._running and who not in self._waiting:
+                self._waiting.append(who)
+            while who not in self._running:
+                if cancel is not None and cancel.is_set():
+                    break
+                if self._waiting and self._waiting[0] is who and len(self._running) < self.max_running:
+                    self._waiting.popleft()
+                    self._running.add(who)
+                    break
+                self._cond.wait(0.2)
+            got = who in self._running
+            if not got and who in self._waiting:
+                self._waiting.remove(who)
+                self._cond.notify_all()
+        try:
+            yield got
+        finally:
+            with self._cond:
+                self._running.discard(who)
+                self._cond.notify_all()
 
 
 class MapJob:
@@ -50,9 +141,9 @@ class MapJob:
         self._thread.join(timeout)
 
     def _run(self) -> None:
-        lower_priority_of_this_thread()  # maps yield the CPU to interactive runs (app.server.queue)
+        lower_priority_of_this_thread()  # maps yield the CPU to interactive runs
         reg = self._registry
-        with reg.slots.slot(self, self.cancel) as got:  # first come, first served (app.server.queue)
+        with reg.slots.slot(self, self.cancel) as got:  # first come, first served
             if not got or self.cancel.is_set():
                 self.state = "cancelled"
                 return
@@ -119,7 +210,7 @@ class MapRegistry:
 
     def __init__(self, settings: ServerSettings, max_running: int = 1, max_jobs: int = 24):
         self.settings = settings
-        # a store that cannot be used leaves None and a notice for the page (app.server.queue)
+        # a store that cannot be used leaves None and a notice for the page
         self.store, self.store_notice = open_store(settings.store_path, solver_fingerprint())
         self.slots = FairSlots(max_running)
         self.max_jobs = max_jobs
@@ -196,12 +287,6 @@ class MapRegistry:
 
 
 def get_registry(settings: Optional[ServerSettings] = None) -> MapRegistry:
-    """The process-wide registry, created on first use (``pn.state.cache``)."""
+    """The process-wide registry, created once (``pn.state.as_cached``, under :data:`CACHE_KEY`)."""
     import panel as pn
-    reg = pn.state.cache.get(CACHE_KEY)
-    if reg is None:
-        new = MapRegistry(settings or ServerSettings.from_env())
-        reg = pn.state.cache.setdefault(CACHE_KEY, new)
-        if reg is not new and new.store is not None:  # another session created it at the same moment
-            new.store.close()
-    return reg
+    return pn.state.as_cached(CACHE_KEY, lambda: MapRegistry(settings or ServerSettings.from_env()))

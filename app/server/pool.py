@@ -1,43 +1,54 @@
-"""Server-wide process pools (one of each per process, ``pn.state.cache``) that keep GIL-heavy
+"""Server-wide process pools (one of each per process, ``pn.state.as_cached``) that keep GIL-heavy
 Python work (trims, eigen-analyses) out of the process serving the pages: the **analysis** pool
 (modes, locus, fan plot, ladder; low CPU priority) and the **run** pool (the trim that starts a
 run, normal priority: a Run never waits behind analyses). :class:`LatestTasks` is a session's
-front to the analysis pool: ``submit(key, event, fn, *args)`` supersedes what the session queued
-under ``key`` and posts ``event(result)`` through the session's thread-safe ``post``.
+front to the analysis pool.
 """
 from __future__ import annotations
 
 import concurrent.futures as cf
 import multiprocessing as mp
+import os
 import threading
 from typing import Callable
 
 from ..events import Notice
-from .queue import BACKGROUND_NICE
 
-CACHE_KEY = "amra-analysis-pool"
-RUN_CACHE_KEY = "amra-run-pool"
+#: niceness of background work (map jobs and the processes they start, the analysis pool):
+#: interactive runs and the event loop get the CPU first
+BACKGROUND_NICE = 10
+
+
+def lower_priority_of_this_thread(nice: int = BACKGROUND_NICE) -> None:
+    """Lower the CPU priority of the calling thread (Linux: niceness is per thread, and processes
+    the thread starts inherit it, so a map job's worker pool runs at the same low priority).
+    Without effect (and harmless) where not supported."""
+    try:
+        tid = threading.get_native_id()
+        if os.getpriority(os.PRIO_PROCESS, tid) < nice:
+            os.setpriority(os.PRIO_PROCESS, tid, nice)
+    except (AttributeError, OSError):
+        pass
 
 
 class AnalysisPool:
-    """``workers`` spawned processes (spawn: the server holds threads, fork could deadlock)."""
+    """``workers`` spawned processes (spawn: the server holds threads, fork could deadlock) at
+    niceness ``nice``; a pool whose worker died is replaced for what follows."""
 
     def __init__(self, workers: int = 1, nice: int = BACKGROUND_NICE):
-        self.workers = workers
-        self.nice = nice
-        self._ctx = mp.get_context("spawn")
+        self.workers, self.nice = workers, nice
         self._lock = threading.Lock()
         self._pool = self._new_pool()
 
     def _new_pool(self):
-        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
-                                      initializer=_nice, initargs=(self.nice,))
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=mp.get_context("spawn"),
+                                      initializer=lower_priority_of_this_thread, initargs=(self.nice,))
 
     def submit(self, fn, *args) -> cf.Future:
         with self._lock:
             try:
                 return self._pool.submit(fn, *args)
-            except cf.process.BrokenProcessPool:  # a worker died: a fresh pool for what follows
+            except cf.process.BrokenProcessPool:
                 self._pool.shutdown(wait=False, cancel_futures=True)
                 self._pool = self._new_pool()
                 return self._pool.submit(fn, *args)
@@ -47,41 +58,32 @@ class AnalysisPool:
             self._pool.shutdown(wait=True, cancel_futures=True)
 
 
-def _get(key: str, nice: int) -> AnalysisPool:
-    import panel as pn
-    pool = pn.state.cache.get(key)
-    if pool is None:
-        new = AnalysisPool(nice=nice)
-        pool = pn.state.cache.setdefault(key, new)
-        if pool is not new:
-            new.close()
-    return pool
-
-
 def get_analysis_pool() -> AnalysisPool:
     """The process-wide analysis pool (low priority: live runs and the event loop first)."""
-    return _get(CACHE_KEY, BACKGROUND_NICE)
+    import panel as pn
+    return pn.state.as_cached("amra-analysis-pool", lambda: AnalysisPool(nice=BACKGROUND_NICE))
 
 
 def get_run_pool() -> AnalysisPool:
     """The process-wide pool that trims new runs (normal priority)."""
-    return _get(RUN_CACHE_KEY, 0)
+    import panel as pn
+    return pn.state.as_cached("amra-run-pool", lambda: AnalysisPool(nice=0))
 
 
 class LatestTasks:
+    """``submit(key, event, fn, *args)`` supersedes what the session queued under ``key`` and posts
+    ``event(result)`` (or a :class:`Notice` of its failure) through the session's thread-safe ``post``."""
+
     def __init__(self, post: Callable, pool: AnalysisPool):
-        self._post = post
-        self._pool = pool
+        self._post, self._pool = post, pool
         self._lock = threading.Lock()
         self._latest: dict = {}  #: key -> the future whose result counts
         self._closed = False
 
     def submit(self, key: str, event, fn, *args) -> cf.Future:
-        """Run ``fn(*args)`` in the pool; ``event(result)`` is posted unless superseded."""
         fut = self._pool.submit(fn, *args)
         with self._lock:
-            old = self._latest.get(key)
-            self._latest[key] = fut
+            old, self._latest[key] = self._latest.get(key), fut
         if old is not None:
             old.cancel()
         fut.add_done_callback(lambda f: self._done(key, event, f))
@@ -95,14 +97,7 @@ class LatestTasks:
         if not current or self._closed or fut.cancelled():
             return
         exc = fut.exception()
-        if exc is not None:
-            self._post(Notice(f"{key} failed: {type(exc).__name__}: {exc}"))
-        else:
-            self._post(event(fut.result()))
-
-    def idle(self) -> bool:
-        with self._lock:
-            return not self._latest
+        self._post(Notice(f"{key} failed: {type(exc).__name__}: {exc}") if exc is not None else event(fut.result()))
 
     def close(self) -> None:
         self._closed = True
@@ -110,11 +105,3 @@ class LatestTasks:
             futs, self._latest = list(self._latest.values()), {}
         for f in futs:
             f.cancel()
-
-
-def _nice(n: int) -> None:
-    import os
-    try:
-        os.nice(n)
-    except OSError:
-        pass

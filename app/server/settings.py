@@ -7,6 +7,7 @@
 """
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,19 +34,17 @@ class ServerSettings:
     @classmethod
     def from_env(cls, env: Optional[Mapping[str, str]] = None) -> "ServerSettings":
         env = os.environ if env is None else env
+
+        def number(key: str, default: str, cast, lo: float, hi: float, allowed: str):
+            raw = env.get(key, default)
+            try:
+                value = cast(raw)
+            except ValueError:
+                value = math.nan
+            if not lo <= value <= hi:
+                raise SettingsError(f"{key} = {raw!r} is not allowed: must be {allowed}")
+            return value
         store = env.get("AMRA_STORE") or str(default_store_path())
-        try:
-            workers = int(env.get("AMRA_MAP_WORKERS", "1"))
-        except ValueError:
-            raise SettingsError(f"AMRA_MAP_WORKERS = {env.get('AMRA_MAP_WORKERS')!r} is not allowed: "
-                                f"must be an integer >= 1") from None
-        if workers < 1:
-            raise SettingsError(f"AMRA_MAP_WORKERS = {workers} is not allowed: must be an integer >= 1")
-        try:
-            max_run = float(env.get("AMRA_MAX_RUN_S", "120"))
-        except ValueError:
-            raise SettingsError(f"AMRA_MAX_RUN_S = {env.get('AMRA_MAX_RUN_S')!r} is not allowed: "
-                                f"must be a number of seconds in [1, 3600]") from None
-        if not 1.0 <= max_run <= 3600.0:
-            raise SettingsError(f"AMRA_MAX_RUN_S = {max_run:g} is out of range: allowed [1, 3600] s")
-        return cls(Path(store).expanduser(), workers, env.get("AMRA_DASK_SCHEDULER") or None, max_run)
+        return cls(Path(store).expanduser(), number("AMRA_MAP_WORKERS", "1", int, 1, math.inf, "an integer >= 1"),
+                   env.get("AMRA_DASK_SCHEDULER") or None,
+                   number("AMRA_MAX_RUN_S", "120", float, 1.0, 3600.0, "a number of seconds in [1, 3600]"))

@@ -13,7 +13,7 @@ pn = pytest.importorskip("panel")
 def _reset_panel_state():
     """Panel keeps process-wide state (caches, sessions); clear it after each test."""
     yield
-    reg = pn.state.cache.pop("amra-map-registry", None)
+    reg = pn.state.cache.pop(("amra-map-registry",), (None, None))[0]  # (pn.state.as_cached's key and entry)
     if reg is not None:
         reg.close()
     pn.state.reset()

@@ -78,4 +78,4 @@ def test_the_registry_is_created_once_per_process(server_settings):
     import panel as pn
     a = get_registry(server_settings)
     b = get_registry(server_settings)
-    assert a is b and pn.state.cache["amra-map-registry"] is a
+    assert a is b and pn.state.cache[("amra-map-registry",)][0] is a  # pn.state.as_cached's entry

@@ -113,7 +113,7 @@ def dashboard_server(tmp_path_factory):
         pool.close()
         run_pool.close()
         for key in ("amra-map-registry", "amra-analysis-pool", "amra-run-pool"):
-            pn.state.cache.pop(key, None)
+            pn.state.cache.pop((key,), None)  # (pn.state.as_cached's keys)
         if old is None:
             os.environ.pop("AMRA_STORE", None)
         else:

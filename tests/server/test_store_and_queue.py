@@ -17,7 +17,7 @@ import pytest
 from amra_core.boundary import MapSpec, run_map, solver_fingerprint
 from amra_core.executor import SerialExecutor
 from amra_core.store import CellStore
-from app.server.queue import Busy, FairSlots, open_store
+from app.server.map_jobs import Busy, FairSlots, open_store
 
 SPEC = MapSpec(fidelity="rigid", cg_values=(0.3, 0.4), n_coarse=3, gj_rel_tol=0.3)
 
