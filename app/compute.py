@@ -1,18 +1,14 @@
 """What the process pools compute (no Panel/HoloViews imports here): the one-shot analyses of a
-case (modes, root locus, fan plot, fidelity ladder) and the kernels' warm-up.
+case (modes, root locus, fan plot, fidelity ladder, mode shapes, sensitivity) and the kernels'
+warm-up.
 
 Trim and the eigen-analysis are largely Python/SciPy and hold the GIL; in the server's own
 process they would starve the sessions' event loop, so :class:`app.server.pool.LatestTasks` sends
-these functions to a process pool. Every argument and result is picklable (frozen dataclasses,
-numpy arrays, plain dicts).
-
-The root locus (:func:`walk`) follows ``amra_core.column.walk_column``: trim continuation down a CG
-column with the modes at each step, the fold and flutter crossings bracketed.
+these functions to a process pool. Every argument and result is picklable.
 """
 from __future__ import annotations
 
 import math
-import threading
 import time
 from dataclasses import dataclass
 from typing import Optional
@@ -27,8 +23,6 @@ from amra_core.stability import analyse
 LOCUS_GJ_RANGE = (50.0, 3000.0)  #: GJ range of the root locus [N m^2/rad]
 FAN_OMEGA_MAX = 60.0  #: top of the fan plot's speed axis [rad/s]
 LADDER_POINTS = 2000  #: points kept per ladder curve
-
-
 LOCUS_REL_TOL = 0.05  #: bracket of the fold and of flutter crossings along the locus [-]
 
 
@@ -73,20 +67,6 @@ class LocusPoint:
     stable: bool
 
 
-def walk(rotor, flight, settings, cg: float, gj_min_nm2: float, gj_max_nm2: float,
-         cancel: Optional[threading.Event] = None) -> list:
-    """Locus points from ``gj_max_nm2`` down to ``gj_min_nm2`` at chordwise CG ``cg`` [chord fraction]."""
-    from amra_core.column import walk_column
-    cw = walk_column(rotor, flight, settings, cg, gj_min_nm2, gj_max_nm2, rel_tol=LOCUS_REL_TOL, cancel=cancel)
-    out = []
-    for p in cw.points:
-        trimmed = p.branch == "normal" and p.trim is not None
-        modes = tuple(m for m in (p.modes or ()) if m.label != "aero lag") if trimmed else ()
-        re = p.max_real_part_per_s if trimmed and math.isfinite(p.max_real_part_per_s) else None
-        out.append(LocusPoint(float(p.gj_nm2), trimmed, modes, re, bool(p.stable)))
-    return out
-
-
 def modes_result(rotor, flight, settings) -> dict:
     """The mode table of the trimmed state (``modes``) and a one-line summary (``text``)."""
     with np.errstate(all="ignore"):
@@ -101,9 +81,18 @@ def modes_result(rotor, flight, settings) -> dict:
 
 
 def locus_result(rotor, flight, settings, cg: float) -> dict:
-    """Locus points along GJ at chordwise CG ``cg`` [chord fraction] and a summary line."""
+    """Locus points along GJ at chordwise CG ``cg`` [chord fraction] and a summary line: the trim
+    continued down the column with the modes at each step (``amra_core.column.walk_column``), the
+    fold and flutter crossings bracketed."""
+    from amra_core.column import walk_column
     with np.errstate(all="ignore"):
-        pts = walk(rotor, flight, settings, cg, *LOCUS_GJ_RANGE)
+        cw = walk_column(rotor, flight, settings, cg, LOCUS_GJ_RANGE[0], LOCUS_GJ_RANGE[1], rel_tol=LOCUS_REL_TOL)
+    pts = []
+    for p in cw.points:
+        trimmed = p.branch == "normal" and p.trim is not None
+        modes = tuple(m for m in (p.modes or ()) if m.label != "aero lag") if trimmed else ()
+        re = p.max_real_part_per_s if trimmed and math.isfinite(p.max_real_part_per_s) else None
+        pts.append(LocusPoint(float(p.gj_nm2), trimmed, modes, re, bool(p.stable)))
     trimmed = [p for p in pts if p.trimmed]
     text = f"Root locus: {len(pts)} GJ values from {LOCUS_GJ_RANGE[1]:g} down to {LOCUS_GJ_RANGE[0]:g} N m²/rad"
     if len(trimmed) < len(pts):

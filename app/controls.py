@@ -218,6 +218,15 @@ URL_KEYS = {"preset": "preset", "rotor": "rotor", "gj_nm2": "gj", "ea_pct": "ea"
 _BY_KEY = {v: k for k, v in URL_KEYS.items()}
 
 
+def allowed(p: param.Parameter) -> str:
+    """The values ``p`` allows: ``"10 to 10000"``, the choices, ``"true or false"`` ('' if any)."""
+    if isinstance(p, param.Number) and p.bounds:
+        return f"{p.bounds[0]:g} to {p.bounds[1]:g}"
+    if isinstance(p, param.Selector):
+        return ", ".join(map(str, p.objects))
+    return "true or false" if isinstance(p, param.Boolean) else ""
+
+
 def _coerce(p: param.Parameter, name: str, raw):
     if isinstance(p, param.Boolean):
         text = str(raw).strip().lower()
@@ -257,15 +266,10 @@ def apply_query(controls: Controls, query: dict) -> list:
                 raise ValueError("an uploaded rotor cannot be shared by link (upload the file again)")
             controls.param.update({name: value})
         except Exception as exc:  # noqa: BLE001 - every bad value becomes a message
-            allowed = ""
-            if isinstance(p, param.Number) and p.bounds:
-                allowed = f" (allowed {p.bounds[0]:g} to {p.bounds[1]:g})"
-            elif isinstance(p, param.Selector):
-                allowed = f" (allowed: {', '.join(map(str, p.objects))})"
-            elif isinstance(p, param.Boolean):
-                allowed = " (allowed: true or false)"
+            rng = allowed(p)
+            rng = f" (allowed{'' if isinstance(p, param.Number) else ':'} {rng})" if rng else ""
             why = str(exc).split("\n")[0]
-            errors.append(f"link parameter {key} = {raw!r} was ignored{allowed}: "
+            errors.append(f"link parameter {key} = {raw!r} was ignored{rng}: "
                           f"{why if len(why) < 200 else why[:200] + ' ...'}")
     return errors
 

@@ -15,23 +15,17 @@ import panel as pn
 import param
 from bokeh.models import CustomJSTickFormatter
 
-from .controls import GJ_BOUNDS
-
-
-def allowed_range(p: param.Parameter) -> str:
-    """``"10 to 10000"`` for a bounded number parameter ('' otherwise)."""
-    return f"{p.bounds[0]:g} to {p.bounds[1]:g}" if isinstance(p, param.Number) and p.bounds else ""
+from .controls import GJ_BOUNDS, allowed
 
 
 def tooltip(p: param.Parameter) -> str:
-    """The parameter's doc (with its unit) and its allowed range."""
-    rng = allowed_range(p)
-    return f"{p.doc} Allowed: {rng}." if rng else (p.doc or "")
+    """The parameter's doc (with its unit) and, for a number, its allowed range."""
+    return f"{p.doc} Allowed: {allowed(p)}." if isinstance(p, param.Number) and p.bounds else (p.doc or "")
 
 
 def check_message(p: param.Parameter, label: str, raw) -> str:
     """Why ``raw`` cannot be the value of ``p`` ('' if it can)."""
-    rng = allowed_range(p)
+    rng = allowed(p)
     if raw is None or isinstance(raw, bool) or not isinstance(raw, (int, float)):
         return f"{label}: {raw!r} is not a number; allowed {rng}"
     if not math.isfinite(raw):

@@ -8,10 +8,10 @@ the map loads the nearest cell's (CG, GJ) into the controls.
 """
 from __future__ import annotations
 
-import csv
 import html
 import io
 import math
+import time
 
 import numpy as np
 import panel as pn
@@ -59,9 +59,7 @@ class Eta:
     """Time left of a filling map [s], from the rate of computed (not stored) cells so far."""
 
     def __init__(self):
-        import time
-        self._clock = time.monotonic
-        self._t0 = None
+        self._clock, self._t0 = time.monotonic, None
 
     def update(self, computed: int, remaining: int, running: bool) -> str:
         """``", about N s left"`` once a few cells were computed while running ('' otherwise)."""
@@ -192,7 +190,9 @@ class MapView(pn.viewable.Viewer):
         and the strong-flutter line; for the map shown, its flutter intervals as shaded bands, the
         weak windows lighter and hatched (shown, but they do not move the critical GJ)."""
         lines = {fid: boundary_lines(job.columns()) for fid, job in related.items()}
-        bands = flutter_bands(self.job.columns() if self.job is not None else [], self.column_width_pct())
+        cgs = sorted(self.job.spec.cg_values) if self.job is not None else []
+        width_pct = 100.0 * min((b - a for a, b in zip(cgs, cgs[1:])), default=0.05)
+        bands = flutter_bands(self.job.columns() if self.job is not None else [], width_pct)
         key = repr((lines, bands))
         if key == self._lines_key:
             return
@@ -204,10 +204,6 @@ class MapView(pn.viewable.Viewer):
         for strength, src in self.band_sources.items():
             rows = [b for b in bands if b["strength"] == strength]
             src.data = {k: [b[k] for b in rows] for k in ("left", "right", "bottom", "top", "text")}
-
-    def column_width_pct(self) -> float:
-        cgs = sorted(self.job.spec.cg_values) if self.job is not None else []
-        return 100.0 * min((b - a for a, b in zip(cgs, cgs[1:])), default=0.05)
 
     def show_sensitivity(self, result: dict) -> None:
         """Bands at the study's CG (:mod:`app.views.sensitivity`): fold (left of the column) and strong

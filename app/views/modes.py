@@ -1,7 +1,7 @@
 """Stability at a glance: the trimmed state's modes (table) and the root locus over GJ.
 
 The table lists the eigenvalues (axial) or Floquet exponents (forward) of the current case, from
-``amra_core.stability.analyse``; the root locus plots the modes of :func:`app.compute.walk` along GJ
+``amra_core.stability.analyse``; the root locus plots the modes of :func:`app.compute.locus_result` along GJ
 for the current CG, coloured by GJ, the current GJ marked, and beside it the largest real part
 against GJ, so the flutter crossing (real part through zero) or the fold (the trim branch ends)
 is visible before any run.
@@ -54,10 +54,8 @@ class ModesView(pn.viewable.Viewer):
                                        name="mode-table")
         self.info = pn.pane.Markdown("Modes of the trim: computing ...", name="modes-info")
         self.locus_info = pn.pane.Markdown("Root locus: computing ...", name="locus-info")
-        self.locus_pipe = Pipe(data=locus_frame([]))
-        self.crit_pipe = Pipe(data=critical_frame([]))
+        self.points_pipe = Pipe(data=[])  #: the locus points (app.compute.locus_result)
         self.current = CurrentGJ()
-        self.points = []
         #: pick a mode to watch its shape; ``on_pick(real_part_per_s, frequency_hz, label)`` computes it
         self.pick = pn.widgets.Select(label="Watch a mode's shape", options={"(choose a mode)": None},
                                       sizing_mode="stretch_width", css_classes=["amra-mode-pick"])
@@ -86,10 +84,12 @@ class ModesView(pn.viewable.Viewer):
             self.animation.info.object = "Computing the mode's shape ..."
             self.on_pick(*event.new)
 
+    @property
+    def points(self) -> list:
+        return self.points_pipe.data
+
     def show_locus(self, points, text: str) -> None:
-        self.points = points
-        self.locus_pipe.send(locus_frame(points))
-        self.crit_pipe.send(critical_frame(points))
+        self.points_pipe.send(points)
         self.locus_info.object = text
 
     def set_gj(self, gj: float) -> None:
@@ -100,6 +100,7 @@ class ModesView(pn.viewable.Viewer):
 
     # -- plots
     def _locus(self, data, gj):
+        data = locus_frame(data)
         pts = hv.Points(data, [RE_DIM, F_DIM], [LOG_GJ_DIM, "label", GJ_DIM]).opts(
             color="log_gj", cmap="viridis", colorbar=True, size=7, tools=["hover"],
             clabel="log10 GJ [N m²/rad]")
@@ -114,6 +115,7 @@ class ModesView(pn.viewable.Viewer):
             legend_position="top_left")
 
     def _critical(self, data, gj):
+        data = critical_frame(data)
         curve = hv.Curve(data, [GJ_DIM], [RE_DIM], label="largest real part").opts(logx=True)
         dots = hv.Scatter(data, [GJ_DIM], [RE_DIM]).opts(size=6, logx=True)
         return (curve * dots * hv.HLine(0.0).opts(color="black", line_dash="dashed")
@@ -122,8 +124,8 @@ class ModesView(pn.viewable.Viewer):
             logx=True, legend_position="top_left")
 
     def __panel__(self):
-        locus = hv.DynamicMap(lambda data, gj: self._locus(data, gj), streams=[self.locus_pipe, self.current])
-        crit = hv.DynamicMap(lambda data, gj: self._critical(data, gj), streams=[self.crit_pipe, self.current])
+        locus = hv.DynamicMap(self._locus, streams=[self.points_pipe, self.current])
+        crit = hv.DynamicMap(self._critical, streams=[self.points_pipe, self.current])
         return pn.Column(
             pn.Row(pn.Column(self.info, self.table, sizing_mode="stretch_width"),
                    pn.pane.HoloViews(crit, sizing_mode="stretch_width"), sizing_mode="stretch_width"),

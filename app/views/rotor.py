@@ -9,7 +9,7 @@ Two small Bokeh figures, shared by the live run and the mode animation (:class:`
   its elastic axis by the elastic twist, exaggerated ``TWIST_SCALE`` times, nose to the left.
 
 :class:`LiveRotor` draws the live run from the session's :class:`app.events.Pose` news (at the
-session's delivery rate, 15 per second at most). :class:`ModeAnimation` plays the frames of one
+session's delivery rate, 10 per second at most). :class:`ModeAnimation` plays the frames of one
 mode of the modes table (``amra_core.pose.mode_animation``, computed in the analysis pool) with
 a Player widget: a frame is one small data update, and nothing runs while it is paused.
 """
