@@ -256,10 +256,6 @@ class Dashboard(pn.viewable.Viewer):
             except Exception as exc:  # noqa: BLE001
                 self.notify(f"no map for this case: {exc}")
 
-    def pump(self) -> None:
-        """Run whatever is due now, in the caller's thread (tests and scripts without a server)."""
-        self.session.pump()
-
     # ------------------------------------------------------------------ exports
     def history_csv(self):
         verdict = self.status.verdict.verdict if self.status.verdict is not None else None

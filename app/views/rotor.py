@@ -1,17 +1,12 @@
 """Watch the mode, not only its traces: the rotor drawn from the solver's state.
 
-Two small Bokeh figures, shared by the live run and the mode animation (:class:`RotorDrawing`):
-
-* **side view**: both blades (blade 0 to the right, blade 1 to the left) with their out-of-plane
-  displacement, teeter included, and the hub bar, exaggerated ``FLAP_SCALE`` times (stated in the
-  title): a seesaw rocks, a collective flap cones both blades alike;
-* **tip sections**: each blade's tip section (a NACA 0012 outline, chord to scale) turned about
-  its elastic axis by the elastic twist, exaggerated ``TWIST_SCALE`` times, nose to the left.
-
-:class:`LiveRotor` draws the live run from the session's :class:`app.events.Pose` news (at the
-session's delivery rate, 10 per second at most). :class:`ModeAnimation` plays the frames of one
-mode of the modes table (``amra_core.pose.mode_animation``, computed in the analysis pool) with
-a Player widget: a frame is one small data update, and nothing runs while it is paused.
+:class:`RotorDrawing` is two small Bokeh figures: a **side view** of both blades' out-of-plane
+displacement, teeter included, and the hub bar (blade 0 to the right), exaggerated ``FLAP_SCALE``
+times: a seesaw rocks, a collective flap cones both blades alike; and each blade's **tip section**
+(NACA 0012, chord to scale) turned about its elastic axis by the twist, exaggerated
+``TWIST_SCALE`` times, nose to the left. :class:`LiveRotor` draws the run's :class:`app.events.Pose`
+news; :class:`ModeAnimation` plays one mode's frames (``amra_core.pose.mode_animation``, computed
+in the analysis pool) with a Player: nothing runs while it is paused.
 """
 from __future__ import annotations
 

@@ -11,7 +11,7 @@ from app.controls import PRESETS
 
 def pump_until(d, pred, wait, timeout_s=60, what="condition"):
     def step():
-        d.pump()
+        d.session.pump()
         return pred()
     wait(step, timeout_s, what=what)
 

@@ -166,7 +166,7 @@ def test_one_session_cannot_stop_or_see_another_run(tmp_path):
         assert a.start_run()
         deadline = time.monotonic() + 60
         while a.live.sent_rows == 0 and time.monotonic() < deadline:
-            a.pump()
+            a.session.pump()
             time.sleep(0.05)
         assert a.session.running
         b.controls.param.trigger("stop")
@@ -178,7 +178,7 @@ def test_one_session_cannot_stop_or_see_another_run(tmp_path):
         assert a.session is not b.session and a.live is not b.live
         n = a.live.sent_rows
         time.sleep(0.3)
-        a.pump()
+        a.session.pump()
         assert a.live.sent_rows > n
     finally:
         a.close()
