@@ -31,7 +31,6 @@ class Started:
     """A run's trim is done; it streams from now on."""
     run_id: int
     start_note: str
-    omega_ref_rad_s: float
 
 
 @dataclass(frozen=True)

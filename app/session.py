@@ -239,7 +239,7 @@ class Session:
             return
         self.sim = sim
         gj = float(np.mean(case.rotor.stations.gj_nm2))
-        post(Started(run_id, sim.start_note, sim.omega_ref))
+        post(Started(run_id, sim.start_note))
         post(RunStatus(run_id, "running", "running"))
         post(Rows(run_id, sim.history, gj, sim.t))
         t_end = case.t_end_s

@@ -10,7 +10,6 @@ cancelled (finished cells are in the SQLite store, so a later job resumes at onc
 from __future__ import annotations
 
 import threading
-import time
 from collections import OrderedDict, deque
 from contextlib import contextmanager
 from dataclasses import replace
@@ -129,7 +128,6 @@ class MapJob:
         self.store_error = ""  #: a store write that failed during this job (the map went on)
         self.cancel = threading.Event()
         self.subscribers: dict = {}  #: who -> callback(), called from the map's thread on every change
-        self.started_at = time.time()
         self._columns: list = []  #: the finished columns' summaries (amra_core.boundary.BoundaryMap.columns)
         self._n_columns = 0
         self._thread = threading.Thread(target=self._run, name="amra-map", daemon=True)
