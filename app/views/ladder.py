@@ -15,10 +15,10 @@ from amra_core.shapes import FIDELITIES
 from ..compute import ladder_curves
 from ..events import Finished, Ladder
 from ..live import UNITS
+from . import FIDELITY_COLOURS
 
 DIMS = {c: hv.Dimension(c, label=name, unit=unit) for c, (name, unit) in UNITS.items()}
-COLOURS = {"rigid": "#1565c0", "fem-torsion": "#ef6c00", "fem-coupled": "#6a1b9a", "previous run": "#9e9e9e",
-           "last run": "#1f77b4"}
+COLOURS = {**FIDELITY_COLOURS, "previous run": "#9e9e9e", "last run": "#1f77b4"}
 COMPARED = ("previous run", "last run")
 #: (curve of app.compute.ladder_curves, y dimension, title) of each plot
 PLOTS = (("omega", DIMS["omega_rad_s"], "Rotor speed"), ("teeter_deg", DIMS["teeter_deg"], "Teeter"),

@@ -22,14 +22,13 @@ from bokeh.plotting import figure
 from amra_core.boundary import MapSpec, cell_class
 from amra_core.stability import CellResult
 
+from . import FIDELITY_COLOURS
 from .status import text
 
 CG_LABEL = "CG [% chord]"
 GJ_LABEL = "GJ [N m²/rad]"
 CLASS_COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "fold": "#8d6e63", "windmill-brake": "#90a4ae",
                  "failed": "#212121"}
-FIDELITY_STYLE = {"rigid": ("#1565c0", "solid"), "fem-torsion": ("#ef6c00", "dashed"),
-                  "fem-coupled": ("#6a1b9a", "dotdash")}
 REDRAW_S = 1.0  #: shortest wall-clock period between redraws of the map [s]
 BUSY_RETRY_MS = 5000  #: a map refused as "server busy" is asked for again after this [ms]
 
@@ -125,8 +124,8 @@ class MapView(pn.viewable.Viewer):
         self.job = None
         self.cells: list = []
         self.cells_source = ColumnDataSource(cell_columns([]))
-        self.fold_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
-        self.flutter_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_STYLE}
+        self.fold_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_COLOURS}
+        self.flutter_sources = {fid: ColumnDataSource({"cg_pct": [], "gj_nm2": []}) for fid in FIDELITY_COLOURS}
         self.band_sources = {k: ColumnDataSource({"left": [], "right": [], "bottom": [], "top": [], "text": []})
                              for k in ("strong", "weak")}
         self.marker_source = ColumnDataSource({"cg_pct": [40.0], "gj_nm2": [1500.0]})
@@ -197,7 +196,7 @@ class MapView(pn.viewable.Viewer):
         if key == self._lines_key:
             return
         self._lines_key = key
-        for fid in FIDELITY_STYLE:
+        for fid in FIDELITY_COLOURS:
             fold, flutter = lines.get(fid, ([], []))
             for src, pts in ((self.fold_sources[fid], fold), (self.flutter_sources[fid], flutter)):
                 src.data = {"cg_pct": [100.0 * cg for cg, _ in pts], "gj_nm2": [gj for _, gj in pts]}
@@ -259,7 +258,7 @@ class MapView(pn.viewable.Viewer):
         items += [LegendItem(label="strong flutter (this map)", renderers=[strong]),
                   LegendItem(label="weak window (does not set GJ)", renderers=[weak])]
         fig.add_tools(HoverTool(renderers=[strong, weak], tooltips=[("", "@text")]))
-        for fid, (colour, _) in FIDELITY_STYLE.items():
+        for fid, colour in FIDELITY_COLOURS.items():
             fold = fig.line("cg_pct", "gj_nm2", source=self.fold_sources[fid], color=colour, line_width=3)
             fig.scatter("cg_pct", "gj_nm2", source=self.fold_sources[fid], color=colour, size=6)
             flutter = fig.line("cg_pct", "gj_nm2", source=self.flutter_sources[fid], color=colour, line_width=2.5,
