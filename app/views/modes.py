@@ -8,7 +8,6 @@ is visible before any run.
 """
 from __future__ import annotations
 
-import io
 import math
 
 import holoviews as hv
@@ -94,9 +93,6 @@ class ModesView(pn.viewable.Viewer):
 
     def set_gj(self, gj: float) -> None:
         self.current.event(gj=float(gj))
-
-    def csv(self) -> io.StringIO:
-        return io.StringIO(self.frame.to_csv(index=False))
 
     # -- plots
     def _locus(self, data, gj):
