@@ -18,8 +18,8 @@ class Notice:
 
 @dataclass(frozen=True)
 class RunStatus:
-    """What the run is doing (``state``: trimming, running, idle) as a line of text; while it runs,
-    once a second, with its rotor speed."""
+    """What the run is doing (``state``: trimming, running, idle) as a line of text; while it runs
+    once a second, and when it ends, with its rotor speed."""
     run_id: int
     state: str
     text: str

@@ -280,7 +280,7 @@ class Session:
         status = "completed" if sim.status == "running" else sim.status
         post(Finished(run_id, sim.history, status, stop.is_set(), sim.t))
         post(RunStatus(run_id, "idle", f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s "
-                                       f"({status})"))
+                                       f"({status})", float(sim.y[Y_OMEGA]) if len(sim.history) else None))
 
     def _post_views(self, sim: Simulation, run_id: int, final: bool) -> None:
         status = ("completed" if sim.status == "running" else sim.status) if final else sim.status
