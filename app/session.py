@@ -102,7 +102,8 @@ class Session:
     # ------------------------------------------------------------------ the event loop
     def throttle(self, fn: Callable[[], None], period_s: float) -> Throttle:
         """A :class:`Throttle` on this session's loop, run by :meth:`pump` and closed with the session."""
-        self._throttles.append(t := Throttle(fn, period_s, self.doc))
+        t = Throttle(fn, period_s, self.doc)
+        self._throttles.append(t)
         return t
 
     def pump(self) -> None:
