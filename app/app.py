@@ -177,8 +177,8 @@ class Dashboard(pn.viewable.Viewer):
         """Compute the frames of a mode of the current case's trim (analysis pool)."""
         parts = self._parts()
         if parts is not None:
-            self.tasks.submit("mode-frames", ModeFrames, compute.mode_frames, *parts, real_part_per_s, frequency_hz,
-                              label)
+            self.tasks.submit("mode-frames", ModeFrames, compute.mode_frames, *parts, real_part_per_s,
+                              frequency_hz, label)
 
     def upload(self, data: bytes, filename: str) -> bool:
         try:

@@ -114,7 +114,8 @@ def fan_data(rotor, fidelity: str, n_modes: int = 8) -> dict:
 def ladder_curves(history: np.ndarray) -> dict:
     """``{t, omega, teeter_deg, twist_deg}`` of a history (rows evenly thinned to :data:`LADDER_POINTS`)."""
     h = history[np.linspace(0, len(history) - 1, min(LADDER_POINTS, len(history))).astype(int)]
-    return {"t": h[:, COL["t_s"]], "omega": h[:, COL["omega_rad_s"]], "teeter_deg": np.degrees(h[:, COL["teeter_rad"]]),
+    return {"t": h[:, COL["t_s"]], "omega": h[:, COL["omega_rad_s"]],
+            "teeter_deg": np.degrees(h[:, COL["teeter_rad"]]),
             "twist_deg": np.degrees(h[:, COL["tip_twist_0_rad"]])}
 
 

@@ -49,7 +49,8 @@ class ExportBar:
     def __init__(self, **callbacks):
         self.buttons = {k: pn.widgets.FileDownload(callback=callbacks[k], filename=f"amra-{k}.csv", label=label,
                                                    button_type="default", sizing_mode="stretch_width",
-                                                   css_classes=[f"amra-export-{k}"]) for k, label in LABELS.items()}
+                                                   css_classes=[f"amra-export-{k}"])
+                        for k, label in LABELS.items()}
 
     def rename(self, names: dict) -> None:
         for key, name in names.items():

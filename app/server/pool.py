@@ -97,7 +97,10 @@ class LatestTasks:
         if not current or self._closed or fut.cancelled():
             return
         exc = fut.exception()
-        self._post(Notice(f"{key} failed: {type(exc).__name__}: {exc}") if exc is not None else event(fut.result()))
+        if exc is not None:
+            self._post(Notice(f"{key} failed: {type(exc).__name__}: {exc}"))
+        else:
+            self._post(event(fut.result()))
 
     def close(self) -> None:
         self._closed = True

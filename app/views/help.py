@@ -74,4 +74,5 @@ def help_markdown(controls=None) -> str:
 
 
 def help_pane(controls=None) -> pn.pane.Markdown:
-    return pn.pane.Markdown(help_markdown(controls), sizing_mode="stretch_width", name="help", css_classes=["amra-help"])
+    return pn.pane.Markdown(help_markdown(controls), sizing_mode="stretch_width", name="help",
+                            css_classes=["amra-help"])

@@ -63,7 +63,8 @@ def run_html(text: str) -> str:
 
 def text(html_text: str = "", css_class: str = "", **kw) -> pn.pane.HTML:
     """A line of HTML that changes in place (a same-text set sends nothing)."""
-    return pn.pane.HTML(html_text, css_classes=[css_class] if css_class else [], **{"sizing_mode": "stretch_width", **kw})
+    kw.setdefault("sizing_mode", "stretch_width")
+    return pn.pane.HTML(html_text, css_classes=[css_class] if css_class else [], **kw)
 
 
 class StatusView(pn.viewable.Viewer):
