@@ -273,7 +273,7 @@ class Server:
 
     def live_latencies_s(self) -> list:
         """Server side of each slider move: the change received -> first rows with it sent [s]
-        (logged by app.dashboard at info level)."""
+        (logged by app.session at info level)."""
         import re
         text = Path(self.dir, "serve.log").read_text(errors="replace")
         return [float(x) for x in re.findall(r"first rows with it sent ([0-9.]+) s after", text)]
@@ -328,7 +328,7 @@ def other_cpus(server_cpus: str) -> str:
 class Settled:
     """Holds the slider moves until every session streams (or has failed): ``--settled``. Without
     it, the first sessions move their sliders while the later ones still load their pages, and
-    each page build holds the server's event loop (app.layout), so those moves measure arrival."""
+    each page build holds the server's event loop (app.app), so those moves measure arrival."""
 
     def __init__(self, sessions: int):
         self.left = sessions
@@ -853,7 +853,7 @@ async def protocol_session(url: str, arguments: dict, moves: int, timeout_s: flo
             await asyncio.sleep(0.8)
             # stiffer each time (about +0.13 decade of GJ, on the slider's step): the run stays stable
             value = min(round((slider.value + 0.13) / slider.step) * slider.step, slider.end)
-            gj = min(max(float(f"{10 ** value:.4g}"), lo), hi)  # what app.controls.gj_slider makes of it
+            gj = min(max(float(f"{10 ** value:.4g}"), lo), hi)  # what app.inputs.gj_slider makes of it
             released, t_set = time.time(), time.monotonic()
             # a release of the handle, as BokehJS reports it: the value, then the throttled value
             # (read-only in Python: set "from JSON", as the server applies a browser's patch)
