@@ -16,8 +16,10 @@ a Python exception, so there are no zero-check branches inside the loops. Togeth
 right-hand side 1.3-1.8x faster (scripts/bench_kernels.py).
 
 Numba's on-disk cache is keyed on each function's own bytecode and its file's time stamp, not on
-these flags nor on callees in other files: a change of policy here must come with a change to every
-kernel module (or ``find . -name '*.nbi' -delete``), or old machine code keeps being loaded.
+these flags nor on callees in other files: every jitted module therefore carries ``CACHE_STAMP``, a
+hash of the amra_core modules it imports, which tests/core/test_kernel_cache_stamps.py checks; a
+change here or in a kernel another module inlines fails that test until the importing modules'
+stamps are updated, which changes their files and so invalidates their cached machine code.
 """
 from numba import njit
 

@@ -8,7 +8,8 @@ time step):
 
 * the model arrays are internally consistent (:func:`check_model_arrays`): the counts in ``p``
   (``P_NS`` structural coordinates, ``P_NST`` stations) agree with ``minv``/``k0``/``k2``/``c``
-  (n_s x n_s), ``st`` (n_st x N_S_COLS), ``shw``/``shd``/``sht`` (2, n_st, n_s), ``tip``
+  (n_s x n_s), ``st`` (n_st x N_S_COLS), ``shw``/``shd``/``sht`` (2, n_st, n_s) and their station-major
+  copies ``sv``/``kin`` (equal numbers, checked), ``tip``
   (2, 2, n_s), ``teeter`` (n_s,), ``lag_inv`` (3 x 3) and the airfoil grids;
 * the state has the length the arrays imply, ``8 + 2 n_s + 4 n_st (+ 2 with three-state inflow)``;
 * the output buffers (derivative, loads, history rows, recorded states) have the shapes and dtype
@@ -29,7 +30,8 @@ from collections import OrderedDict
 import numpy as np
 
 from . import kernels
-from .layout import N_LOADS, N_P, N_S_COLS, N_Y_FIXED, P_INFLOW3, P_NS, P_NST, ModelArrays
+from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_INFLOW3, P_NS, P_NST, STATION_STRIDE,
+                     ModelArrays, station_shapes, station_vectors)
 
 
 class KernelShapeError(ValueError):
@@ -91,6 +93,16 @@ def check_model_arrays(m: ModelArrays) -> tuple:
         _shape("ModelArrays.st", m.st, (nst, N_S_COLS))
         for name in ("shw", "shd", "sht"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (2, nst, ns))
+        if 2 * nst > STATION_STRIDE:
+            raise KernelShapeError(f"{nst} stations per blade: at most {STATION_STRIDE // 2}")
+        _shape("ModelArrays.sv", m.sv, (N_SV_ROWS, STATION_STRIDE))
+        _shape("ModelArrays.kin", m.kin, (ns, 3 * STATION_STRIDE))
+        # the station-major copies the right-hand side reads must be the same numbers as st and
+        # shw/shd/sht (arrays mixed from two models would otherwise pass every shape check)
+        if not np.array_equal(m.sv, station_vectors(m.st)):
+            raise KernelShapeError("ModelArrays.sv is not the station table st laid out per blade")
+        if not np.array_equal(m.kin, station_shapes(m.shw, m.shd, m.sht)):
+            raise KernelShapeError("ModelArrays.kin is not shw, shd, sht laid out per coordinate")
         _shape("ModelArrays.tip", m.tip, (2, 2, ns))
         _shape("ModelArrays.teeter", m.teeter, (ns,))
         _shape("ModelArrays.lag_inv", m.lag_inv, (3, 3))

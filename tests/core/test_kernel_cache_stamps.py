@@ -1,0 +1,56 @@
+"""Numba's on-disk cache knows only a function's own file: machine code that inlines or calls a
+kernel from another module (trim_kernels calls kernels.evaluate; kernels inlines the atan2, sincos
+and airfoil kernels) is loaded unchanged after that other module changes, and computes with the old
+code. A stale Newton kernel of this kind once "trimmed" a fem-torsion rotor to a state whose
+residual was 400 (caught while the station loops were rewritten). So every jitted module carries
+``CACHE_STAMP``, a hash of the amra_core modules it imports: changing one of them fails this test
+until the stamp is updated, which changes the importing file and so invalidates its cache."""
+import ast
+import hashlib
+import re
+from pathlib import Path
+
+import pytest
+
+CORE = Path(__file__).resolve().parents[2] / "amra_core"
+JITTED = sorted(p for p in CORE.glob("*.py")
+                if re.search(r"^@(kernel|inline_kernel|exact_kernel)\b", p.read_text(), re.M))
+
+
+def _imported_core_modules(path: Path) -> list:
+    names = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.level == 1:
+            if node.module:
+                names.add(node.module.split(".")[0])
+            else:
+                names.update(a.name for a in node.names)
+    return sorted(names)
+
+
+def expected_stamp(path: Path) -> str:
+    h = hashlib.sha256()
+    for name in _imported_core_modules(path):
+        h.update(name.encode() + b"\0" + (CORE / f"{name}.py").read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _stamp_in(path: Path):
+    for node in ast.parse(path.read_text()).body:
+        if isinstance(node, ast.Assign) and any(getattr(t, "id", "") == "CACHE_STAMP" for t in node.targets):
+            return node.value.value
+    return None
+
+
+def test_the_jitted_modules_are_the_expected_ones():
+    assert {p.name for p in JITTED} >= {"kernels.py", "trim_kernels.py", "airfoil_kernel.py", "atan2_kernel.py",
+                                         "sincos_kernel.py"}
+
+
+@pytest.mark.parametrize("path", JITTED, ids=lambda p: p.name)
+def test_every_jitted_module_stamps_the_modules_it_imports(path):
+    want = expected_stamp(path)
+    assert _stamp_in(path) == want, (
+        f"amra_core/{path.name}: set CACHE_STAMP = \"{want}\" (a module it imports, "
+        f"{', '.join(_imported_core_modules(path))}, changed: without a new stamp Numba keeps loading "
+        f"machine code compiled with the old one)")
