@@ -483,9 +483,11 @@ def station_loads(y, m, out):
             out[b, j, 4] = w
 
 
-@kernel
+@inline_kernel
 def record_row(t, y, m, loads, row):
-    """One history row (columns HISTORY_COLUMNS) for state ``y`` at time ``t``."""
+    """One history row (columns HISTORY_COLUMNS) for state ``y`` at time ``t``. Inlined into
+    :func:`advance`, which records every step at the rigid level's step: an out-of-line call with
+    its arrays cost 1 us of a 3.6 us step."""
     ns = int(m.p[P_NS])
     x0 = N_Y_FIXED
     row[0] = t; row[1] = y[Y_PSI]; row[2] = y[Y_OMEGA]
@@ -517,7 +519,8 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
         rhs(y, k1, m, loads, work, cw)
         if s % record_every == 0 and rows < hist.shape[0]:
             record_row(t0 + s * dt, y, m, loads, hist[rows])
-            states[rows, :] = y
+            for i in range(n):
+                states[rows, i] = y[i]
             rows += 1
         for i in range(n):
             yt[i] = y[i] + 0.5 * dt * k1[i]
