@@ -113,7 +113,8 @@ def main(argv=None) -> int:
         warm = MapSpec(cg_values=(0.40,), gj_min=2500.0)
         for _ in range(2 * args.workers):  # every worker imports the solver and loads its kernels
             pool.submit(compute_column, warm.column_task(0.40))
-        pool.wait()
+        while pool.n_pending:
+            pool.wait()
         out["pool_warm_up_s"] = round(time.perf_counter() - t0, 3)
 
     def run_map(spec, **kw):
