@@ -21,6 +21,7 @@ from .jit import exact_kernel, inline_kernel, kernel
 from .sincos_kernel import sincos
 from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
+                    P_UNIT_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
                     P_VH, S_A, S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, STATION_STRIDE, SV_A, SV_C, SV_R, SV_SIGN,
                     SV_THETA0, SV_W, SV_XAC, SV_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0,
@@ -28,7 +29,7 @@ from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LO
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "ad57f705bd4df209"
+CACHE_STAMP = "d3447c3c255eccc8"
 
 A1, A2 = WAGNER_A
 B1, B2 = WAGNER_B
@@ -302,25 +303,44 @@ def rhs(y, dy, m, loads, work, cw):
     fx = 0.0; xk2x = 0.0; jdot = 0.0; xhx = 0.0; uf = 0.0; ug = 0.0
     xs0x = 0.0; xs1x = 0.0; xs0xd = 0.0; xs1xd = 0.0; xi0x = 0.0; xi1x = 0.0; xi0xd = 0.0; xi1xd = 0.0
     ugl0 = 0.0; ugl1 = 0.0; l00 = 0.0; l01 = 0.0; l11 = 0.0; ul0f = 0.0; ul1f = 0.0; xhl0 = 0.0; xhl1 = 0.0
+    # a mass-normalised modal basis (every reduced FEM level) has M = I: then M^-1 H = H and the
+    # products with M^-1 are the vectors themselves (model.py sets P_UNIT_MASS; the guard checks it)
+    unit_mass = p[P_UNIT_MASS] > 0.5
     for i in range(ns):
         k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
         s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
         h0x = 0.0; h0xd = 0.0; v0x = 0.0
-        for k in range(ns):
-            q = y[x0 + k]; qd = y[xd0 + k]
-            k0x += m.k0[i, k] * q
-            k2x += m.k2[i, k] * q
-            cxd += m.c[i, k] * qd
-            hx += m.gyh[i, k] * q
-            hxd += m.gyh[i, k] * qd
-            ux += m.ugyh[i, k] * q
-            s0x += m.ls2[0, i, k] * q
-            s1x += m.ls2[1, i, k] * q
-            i0x += m.li2[0, i, k] * q
-            i1x += m.li2[1, i, k] * q
-            h0x += m.glh[0, i, k] * q
-            h0xd += m.glh[0, i, k] * qd
-            v0x += m.uglh[0, i, k] * q
+        if unit_mass:
+            for k in range(ns):
+                q = y[x0 + k]; qd = y[xd0 + k]
+                k0x += m.k0[i, k] * q
+                k2x += m.k2[i, k] * q
+                cxd += m.c[i, k] * qd
+                hx += m.gyh[i, k] * q
+                hxd += m.gyh[i, k] * qd
+                s0x += m.ls2[0, i, k] * q
+                s1x += m.ls2[1, i, k] * q
+                i0x += m.li2[0, i, k] * q
+                i1x += m.li2[1, i, k] * q
+                h0x += m.glh[0, i, k] * q
+                h0xd += m.glh[0, i, k] * qd
+            ux = hx; v0x = h0x
+        else:
+            for k in range(ns):
+                q = y[x0 + k]; qd = y[xd0 + k]
+                k0x += m.k0[i, k] * q
+                k2x += m.k2[i, k] * q
+                cxd += m.c[i, k] * qd
+                hx += m.gyh[i, k] * q
+                hxd += m.gyh[i, k] * qd
+                ux += m.ugyh[i, k] * q
+                s0x += m.ls2[0, i, k] * q
+                s1x += m.ls2[1, i, k] * q
+                i0x += m.li2[0, i, k] * q
+                i1x += m.li2[1, i, k] * q
+                h0x += m.glh[0, i, k] * q
+                h0xd += m.glh[0, i, k] * qd
+                v0x += m.uglh[0, i, k] * q
         # blade 1's parts from the totals (glh[0] + glh[1] = gyh, uglh[0] + uglh[1] = ugyh)
         h1x = hx - h0x; h1xd = hxd - h0xd; v1x = ux - v0x
         # flap-lag Coriolis: -d/dx of Omega S_b(x) zeta_b' + 1/2 I_b(x) zeta_b'^2
@@ -379,9 +399,11 @@ def rhs(y, dy, m, loads, work, cw):
     dy[Y_ZETAD0] = zdd0
     dy[Y_ZETAD0 + 1] = zdd1
     for i in range(ns):
-        acc = 0.0
-        for k in range(ns):
-            acc += m.minv[i, k] * cw[C_F, k]
+        acc = cw[C_F, i]
+        if not unit_mass:
+            acc = 0.0
+            for k in range(ns):
+                acc += m.minv[i, k] * cw[C_F, k]
         dy[x0 + i] = y[xd0 + i]
         dy[xd0 + i] = acc - dy[xd0 + i] * omd - cw[C_UL0, i] * zdd0 - cw[C_UL1, i] * zdd1
     dy[Y_ZETA0] = zd0

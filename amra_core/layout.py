@@ -21,7 +21,8 @@ P_HOLD_OMEGA, P_HOLD_VD, P_AERO, P_IR, P_ILAG, P_SLAG, P_KLAG, P_K2LAG = range(8
 P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG, P_INFLOW3 = range(16, 22)
 P_VACUUM = 22  #: 1: no aerodynamic loads, inflow and descent frozen (conservation tests only)
 P_FLAG = 23  #: static lag moment per Omega^2 [kg m] (RotorStructure.f_lag)
-N_P = 24
+P_UNIT_MASS = 24  #: 1: minv is the identity (a mass-normalised modal basis), so ugyh = gyh, uglh = glh
+N_P = 25
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
