@@ -15,7 +15,7 @@ from .jit import inline_kernel, kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "6a4852fa42dc0e35"
+CACHE_STAMP = "29b2b72e9273f3e8"
 
 MACH_CLIP = 0.7  #: Mach number at which the Prandtl-Glauert factor is capped [-].
 PG_FULL_DEG = 10.0  #: |alpha| up to which the full Prandtl-Glauert factor applies [deg].

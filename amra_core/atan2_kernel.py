@@ -17,7 +17,7 @@ from .jit import inline_kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "6a4852fa42dc0e35"
+CACHE_STAMP = "29b2b72e9273f3e8"
 
 _P0, _P1, _P2, _P3, _P4 = (-8.750608600031904122785e-1, -1.615753718733365076637e1,
                            -7.500855792314704667340e1, -1.228866684490136173410e2,

@@ -16,7 +16,7 @@ from .jit import inline_kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "6a4852fa42dc0e35"
+CACHE_STAMP = "29b2b72e9273f3e8"
 
 _S0, _S1, _S2, _S3, _S4, _S5 = (1.58962301576546568060e-10, -2.50507477628578072866e-8,
                                 2.75573136213857245213e-6, -1.98412698295895385996e-4,

@@ -17,7 +17,7 @@ from .jit import kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "66c47bfe37d089d9"
+CACHE_STAMP = "3f81d3bb198b41bd"
 
 
 @kernel
