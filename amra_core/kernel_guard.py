@@ -8,7 +8,8 @@ time step):
 
 * the model arrays are internally consistent (:func:`check_model_arrays`): the counts in ``p``
   (``P_NS`` structural coordinates, ``P_NST`` stations) agree with ``minv``/``k0``/``k2``/``c``
-  (n_s x n_s), ``st`` (n_st x N_S_COLS), ``shw``/``shd``/``sht`` (2, n_st, n_s), ``tip``
+  (n_s x n_s), ``st`` (n_st x N_S_COLS), ``shw``/``shd``/``sht`` (2, n_st, n_s) and their station-major
+  copies ``sv``/``kin`` (equal numbers, checked), ``tip``
   (2, 2, n_s), ``teeter`` (n_s,), ``lag_inv`` (3 x 3) and the airfoil grids;
 * the state has the length the arrays imply, ``8 + 2 n_s + 4 n_st (+ 2 with three-state inflow)``;
 * the output buffers (derivative, loads, history rows, recorded states) have the shapes and dtype
@@ -29,7 +30,8 @@ from collections import OrderedDict
 import numpy as np
 
 from . import kernels
-from .layout import N_LOADS, N_P, N_S_COLS, N_Y_FIXED, P_INFLOW3, P_NS, P_NST, ModelArrays
+from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_INFLOW3, P_NS, P_NST, P_UNIT_MASS,
+                     STATION_STRIDE, ModelArrays, station_shapes, station_vectors)
 
 
 class KernelShapeError(ValueError):
@@ -64,22 +66,22 @@ def _shape(name: str, a, shape: tuple) -> None:
 def _counts(m: ModelArrays):
     p = m.p
     _shape("ModelArrays.p", p, (N_P,))
-    ns_f, nst_f, in3 = p.item(P_NS), p.item(P_NST), p.item(P_INFLOW3)
+    ns_f, nst_f, in3, unit = p.item(P_NS), p.item(P_NST), p.item(P_INFLOW3), p.item(P_UNIT_MASS)
     if not (1.0 <= ns_f < 1e9 and ns_f == int(ns_f)):  # NaN fails the range test
         raise KernelShapeError(f"ModelArrays.p[P_NS] (structural coordinates) = {ns_f!r} must be a positive whole number")
     if not (1.0 <= nst_f < 1e9 and nst_f == int(nst_f)):
         raise KernelShapeError(f"ModelArrays.p[P_NST] (stations) = {nst_f!r} must be a positive whole number")
-    return int(ns_f), int(nst_f), in3 > 0.5
+    return int(ns_f), int(nst_f), in3 > 0.5, unit > 0.5
 
 
 def check_model_arrays(m: ModelArrays) -> tuple:
     """Verify that ``m`` is internally consistent; return ``(n_s, n_st, n_y)``."""
     if not isinstance(m, ModelArrays):
         raise KernelShapeError(f"model arrays must be a ModelArrays, got {type(m).__name__}")
-    ns, nst, inflow3 = _counts(m)
+    ns, nst, inflow3, unit_mass = _counts(m)
     with _LOCK:
         hit = _VALIDATED.get(id(m))
-    if hit is None or hit[0] is not m or hit[1:] != (ns, nst, inflow3):
+    if hit is None or hit[0] is not m or hit[1:] != (ns, nst, inflow3, unit_mass):
         for name in ("minv", "k0", "k2", "c", "gyh", "ugyh"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (ns, ns))
         for name in ("sf", "gy0", "ugy0"):
@@ -91,6 +93,21 @@ def check_model_arrays(m: ModelArrays) -> tuple:
         _shape("ModelArrays.st", m.st, (nst, N_S_COLS))
         for name in ("shw", "shd", "sht"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (2, nst, ns))
+        if 2 * nst > STATION_STRIDE:
+            raise KernelShapeError(f"{nst} stations per blade: at most {STATION_STRIDE // 2}")
+        _shape("ModelArrays.sv", m.sv, (N_SV_ROWS, STATION_STRIDE))
+        _shape("ModelArrays.kin", m.kin, (ns, 3 * STATION_STRIDE))
+        # the station-major copies the right-hand side reads must be the same numbers as st and
+        # shw/shd/sht (arrays mixed from two models would otherwise pass every shape check)
+        if not np.array_equal(m.sv, station_vectors(m.st)):
+            raise KernelShapeError("ModelArrays.sv is not the station table st laid out per blade")
+        if not np.array_equal(m.kin, station_shapes(m.shw, m.shd, m.sht)):
+            raise KernelShapeError("ModelArrays.kin is not shw, shd, sht laid out per coordinate")
+        # the kernel then skips minv, ugyh and uglh: they must be what it assumes
+        if unit_mass and not (np.array_equal(m.minv, np.eye(ns)) and np.array_equal(m.ugyh, m.gyh)
+                              and np.array_equal(m.uglh, m.glh)):
+            raise KernelShapeError("ModelArrays.p[P_UNIT_MASS] is set but minv is not the identity "
+                                   "(or ugyh, uglh are not gyh, glh)")
         _shape("ModelArrays.tip", m.tip, (2, 2, ns))
         _shape("ModelArrays.teeter", m.teeter, (ns,))
         _shape("ModelArrays.lag_inv", m.lag_inv, (3, 3))
@@ -105,7 +122,7 @@ def check_model_arrays(m: ModelArrays) -> tuple:
         if not (math.isfinite(m.af_dalpha) and m.af_dalpha > 0 and math.isfinite(m.af_alpha0)):
             raise KernelShapeError(f"ModelArrays.af_dalpha = {m.af_dalpha!r} must be a positive finite grid step")
         with _LOCK:
-            _VALIDATED[id(m)] = (m, ns, nst, inflow3)
+            _VALIDATED[id(m)] = (m, ns, nst, inflow3, unit_mass)
             _VALIDATED.move_to_end(id(m))
             while len(_VALIDATED) > _MAX_VALIDATED:
                 _VALIDATED.popitem(last=False)

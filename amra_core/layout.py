@@ -21,11 +21,20 @@ P_HOLD_OMEGA, P_HOLD_VD, P_AERO, P_IR, P_ILAG, P_SLAG, P_KLAG, P_K2LAG = range(8
 P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG, P_INFLOW3 = range(16, 22)
 P_VACUUM = 22  #: 1: no aerodynamic loads, inflow and descent frozen (conservation tests only)
 P_FLAG = 23  #: static lag moment per Omega^2 [kg m] (RotorStructure.f_lag)
-N_P = 24
+P_UNIT_MASS = 24  #: 1: minv is the identity (a mass-normalised modal basis), so ugyh = gyh, uglh = glh
+N_P = 25
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
 N_S_COLS = 7
+
+# --- station vectors: one column per blade station, blade 0's n_st then blade 1's (ModelArrays.sv)
+SV_R, SV_W, SV_C, SV_XEA, SV_XAC, SV_THETA0, SV_A, SV_SIGN = range(8)  #: SV_SIGN: +1 blade 0, -1 blade 1
+N_SV_ROWS = 8
+#: row length of the station-major arrays (``sv``, ``kin`` and the right-hand side's station scratch):
+#: at least 2 x the largest station count (60), and a constant, so the compiler knows the rows of
+#: one array do not overlap and vectorises the station loops without run-time overlap checks
+STATION_STRIDE = 128
 
 # --- fixed state slots --------------------------------------------------------------------------
 Y_PSI, Y_OMEGA, Y_VD, Y_V0, Y_ZETA0, Y_ZETA1, Y_ZETAD0, Y_ZETAD1 = range(8)
@@ -70,3 +79,32 @@ class ModelArrays(NamedTuple):
     glh: np.ndarray  #: (2, n, n) blade b's part of ``gyh`` (``glh[0] + glh[1] = gyh``)
     ugl0: np.ndarray  #: (2, n) minv @ gl0[b]
     uglh: np.ndarray  #: (2, n, n) minv @ glh[b]
+    #: (N_SV_ROWS, STATION_STRIDE) the station table ``st`` once per blade (blade 0's n_st stations,
+    #: then blade 1's, then zeros), one ``SV_*`` row per quantity: the right-hand side runs its
+    #: station loops over both blades' stations as one vector
+    sv: np.ndarray
+    #: (n, 3 STATION_STRIDE) ``shw``, ``shd``, ``sht`` per coordinate, one after the other, each
+    #: station-contiguous as ``sv``: the same numbers, laid out for the vectorised loop
+    kin: np.ndarray
+
+
+def station_vectors(st: np.ndarray) -> np.ndarray:
+    """The station table ``st`` (n_st, N_S_COLS) as ModelArrays.sv (N_SV_ROWS, STATION_STRIDE):
+    blade 0's stations then blade 1's, one row per quantity, the blade's sign (+1, -1) in SV_SIGN,
+    zeros after the last station."""
+    nst = st.shape[0]
+    sv = np.zeros((N_SV_ROWS, STATION_STRIDE))
+    for row, col in ((SV_R, S_R), (SV_W, S_W), (SV_C, S_C), (SV_XEA, S_XEA), (SV_XAC, S_XAC),
+                     (SV_THETA0, S_THETA0), (SV_A, S_A)):
+        sv[row, :2 * nst] = np.tile(st[:, col], 2)
+    sv[SV_SIGN, :2 * nst] = np.repeat([1.0, -1.0], nst)
+    return sv
+
+
+def station_shapes(shw: np.ndarray, shd: np.ndarray, sht: np.ndarray) -> np.ndarray:
+    """``shw``, ``shd``, ``sht`` (2, n_st, n_s each) as ModelArrays.kin (n_s, 3 STATION_STRIDE)."""
+    nsv, ns = 2 * shw.shape[1], shw.shape[2]
+    kin = np.zeros((ns, 3 * STATION_STRIDE))
+    for a, shape in enumerate((shw, shd, sht)):
+        kin[:, a * STATION_STRIDE:a * STATION_STRIDE + nsv] = shape.reshape(nsv, ns).T
+    return kin

@@ -27,9 +27,10 @@ from .structure import assemble, torsion_stiffness
 from .layout import (  # noqa: F401
     L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, ModelArrays, N_LOADS, N_P, N_S_COLS, N_Y_FIXED,
     P_AERO, P_ALPHA_S, P_A_SOUND, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_INFLOW3, P_IR,
-    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM, P_VH, S_A,
+    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_UNIT_MASS, P_VACUUM,
+    P_VH, S_A,
     S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0, Y_ZETA1,
-    Y_ZETAD0, Y_ZETAD1)
+    Y_ZETAD0, Y_ZETAD1, station_shapes, station_vectors)
 
 
 @dataclass(frozen=True)
@@ -158,6 +159,7 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     own = np.array  # a fresh, writable, contiguous copy: nothing a kernel gets is shared
     p = own(parts.p)
     p[P_NS] = phi.shape[1]
+    p[P_UNIT_MASS] = float(np.array_equal(minv, np.eye(phi.shape[1])))
     arrays = ModelArrays(
         p=p, minv=own(minv), k0=own(k0), k2=own(k2), c=phi.T @ structural_damping(s, zeta) @ phi,
         st=own(parts.st), shw=own(shw), shd=own(shd), sht=own(sht), tip=own(tip), teeter=own(teeter),
@@ -172,6 +174,7 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
         glh=np.ascontiguousarray(np.array([phi.T @ s.HL[b] @ phi for b in range(2)])),
         ugl0=np.ascontiguousarray(np.array([minv @ (phi.T @ s.gl0[b]) for b in range(2)])),
         uglh=np.ascontiguousarray(np.array([minv @ (phi.T @ s.HL[b] @ phi) for b in range(2)])),
+        sv=station_vectors(parts.st), kin=station_shapes(shw, shd, sht),
     )
     return CompiledModel(arrays, mesh.n_q, phi.shape[1], parts.st.shape[0], s.kinds, s, phi, phi_pinv, rotor,
                          flight, settings)

@@ -15,6 +15,10 @@ import numpy as np
 from . import kernels
 from .jit import kernel
 
+#: hash of the amra_core modules imported above: Numba's cache does not see them
+#: (tests/core/test_kernel_cache_stamps.py)
+CACHE_STAMP = "3f81d3bb198b41bd"
+
 
 @kernel
 def _resid(y, m, ir, dy, loads, out):

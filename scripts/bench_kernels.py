@@ -25,10 +25,10 @@ from amra_core.simulation import Case, Simulation
 def _repeat_rhs(y, m, n):
     dy = np.empty_like(y)
     loads = np.zeros(8)
-    work = np.empty(4 * y.shape[0] + 2)
+    work, cw = kernels.new_work(m)
     for _ in range(n):
         y[1] += 1e-9  # a new azimuth each call, so nothing is hoisted out of the loop
-        kernels.rhs(y, dy, m, loads, work)
+        kernels.rhs(y, dy, m, loads, work, cw)
     return dy[0]
 
 

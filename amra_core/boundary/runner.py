@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import uuid
 from dataclasses import replace
 from typing import Callable, Iterator, Optional
 
@@ -36,6 +37,9 @@ class MapRun:
         self.cached = 0
         self.done = 0
         self.in_flight = 0
+        #: this run's mark on the columns it hands to the executor: an executor shared with other
+        #: runs (a server's pool, a Dask cluster) may return their results too, which this run skips
+        self._token = uuid.uuid4().hex
         self._t0 = None
         self.wall_time_s = 0.0
         self.cancelled = False
@@ -134,15 +138,17 @@ class MapRun:
                 yield from self._run_inline(todo)
                 return
             for cg in todo:
-                ex.submit(compute_column, spec.column_task(cg), cg)
+                ex.submit(compute_column, spec.column_task(cg), (self._token, cg))
                 self.in_flight += 1
             while self.in_flight:
                 if self.cancel.is_set():
                     self.cancelled = True
                     return
                 for out in ex.wait(timeout=0.1):
+                    if not (isinstance(out.tag, tuple) and out.tag[0] == self._token):
+                        continue  # another run's column, on a shared executor
                     self.in_flight -= 1
-                    col = out.value if out.ok else self._crashed_column(out.tag, out.reason)
+                    col = out.value if out.ok else self._crashed_column(out.tag[1], out.reason)
                     if out.ok:
                         self._store_column(col)
                     for c in self._finish_column(col, False, False):

@@ -33,7 +33,8 @@ DEFAULT_CG = tuple(round(float(x), 6) for x in np.linspace(0.20, 0.50, 16))
 #: never served for a changed solver
 _SOLVER_SOURCES = ("airfoil", "airfoil_kernel", "atan2_kernel", "column", "continuation", "equilibrium", "flight",
                    "jit", "kernel_guard", "kernels", "layout", "model", "periodic_trim", "rigid_equivalence", "rotor",
-                   "shapes", "shooting", "simulation", "stability", "structure", "trim", "trim_kernels", "verdict",
+                   "shapes", "shooting", "simulation", "sincos_kernel", "stability", "structure", "trim",
+                   "trim_kernels", "verdict",
                    "boundary/intervals", "boundary/tasks", "boundary/result")
 #: modules a map computation imports that do not change its answers (orchestration, keys, pools)
 ORCHESTRATION_SOURCES = ("boundary", "boundary/runner", "boundary/spec", "executor")

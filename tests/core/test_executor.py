@@ -113,6 +113,24 @@ def test_pool_map_equals_serial_map(pool_map):
     assert [c.to_dict() for c in pool_map.cells] == [c.to_dict() for c in serial.cells]
 
 
+def test_a_map_on_a_shared_pool_takes_only_its_own_columns(pool_map):
+    """A pool shared by several runs (a server's, or a benchmark's warmed one) also returns what
+    others submitted: a foreign result waiting in the pool, and one finishing during the map, must
+    neither end the map early nor enter it as a column (they once did: a mu 0.1 map showed two
+    columns of the axial map run just before it on the same pool)."""
+    from amra_core.boundary import compute_column
+    other = MapSpec(mu=0.1, cg_values=(0.46,), gj_min=2500.0)
+    with LocalPoolExecutor(2) as ex:
+        ex.submit(_square, 2, tag=None)  # a stranger's result, ready before the map starts
+        ex.submit(compute_column, other.column_task(0.46), (other, 0.46))  # another map's column
+        shared = run_map(SPEC, executor=ex)
+        while ex.n_pending:
+            ex.wait()
+    assert shared.complete
+    assert shared.critical_gj == pool_map.critical_gj
+    assert [c.to_dict() for c in shared.cells] == [c.to_dict() for c in pool_map.cells]
+
+
 def test_dask_local_cluster_gives_the_same_map(pool_map, capsys):
     distributed = pytest.importorskip("distributed")
     with distributed.LocalCluster(n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:

@@ -17,9 +17,11 @@ import amra_core
 ROOT = Path(amra_core.__file__).resolve().parent
 FORBIDDEN = ("app", "panel", "holoviews", "bokeh", "param")
 KERNEL_DEPS = {
-    "amra_core.kernels": {"amra_core.layout", "amra_core.jit", "amra_core.airfoil_kernel", "amra_core.atan2_kernel"},
+    "amra_core.kernels": {"amra_core.layout", "amra_core.jit", "amra_core.airfoil_kernel", "amra_core.atan2_kernel",
+                          "amra_core.sincos_kernel"},
     "amra_core.airfoil_kernel": {"amra_core.jit"},
     "amra_core.atan2_kernel": {"amra_core.jit"},
+    "amra_core.sincos_kernel": {"amra_core.jit"},
     "amra_core.trim_kernels": {"amra_core.kernels", "amra_core.jit"},
     "amra_core.layout": set(),
     "amra_core.jit": set(),
