@@ -1,8 +1,8 @@
 """``panel serve --setup app/warmup.py``: run once per server process before any session.
 
 Compiles (or loads from Numba's cache) the kernels a session uses (:func:`app.compute.warm`), and
-creates the process-wide map registry and the process pools (warmed too), so the first user does
-not wait for the JIT.
+creates the process-wide map registry and the process pools, its map workers' included (warmed
+too), so the first user does not wait for the JIT.
 """
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ if __name__ in ("panel_setup_module", "__main__"):
     # the app's loggers ("amra.*", e.g. the server-side latency of live changes) at the server's level
     level = os.environ.get("AMRA_LOG_LEVEL", "info")
     logging.getLogger("amra").setLevel({"trace": "DEBUG"}.get(level, level).upper())
-    get_registry(ServerSettings.from_env())
+    get_registry(ServerSettings.from_env()).warm_map_pool()  # map workers started and warm too
     get_analysis_pool().submit(warm_worker)  # start and warm the pool processes too
     get_run_pool().submit(warm_worker)
     hv.extension("bokeh", logo=False)

@@ -16,7 +16,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Optional
 
-from amra_core.boundary import MapSpec, iter_map, solver_fingerprint
+from amra_core.boundary import MapSpec, compute_column, iter_map, solver_fingerprint
 from amra_core.executor import DaskExecutor, LocalPoolExecutor
 from amra_core.store import CellStore
 
@@ -152,7 +152,7 @@ class MapJob:
                 # cells in other processes (trim and eigen-analysis hold the GIL: in this process
                 # they would starve the sessions' event loop)
                 sched = reg.settings.dask_scheduler
-                ex = DaskExecutor(sched) if sched else LocalPoolExecutor(reg.settings.map_workers)
+                ex = DaskExecutor(sched) if sched else reg.map_pool()
                 run = iter_map(self.spec, executor=ex, store=reg.store, cancel=self.cancel)
                 for cell in run:
                     self.store_error = getattr(run, "store_error", "")
@@ -170,7 +170,7 @@ class MapJob:
                 self.error = f"{type(exc).__name__}: {exc}"
                 self.state = "failed"
             finally:
-                if ex is not None:
+                if ex is not None and sched:  # the local pool stays, warm, for the next job
                     ex.close()
                 if self.state == "done":
                     with self._lock:
@@ -216,6 +216,25 @@ class MapRegistry:
         self._jobs: "OrderedDict[MapSpec, MapJob]" = OrderedDict()
         self._live: list = []  #: every job whose thread may still run (cancelled ones included)
         self.jobs_started = 0
+        self._pool: Optional[LocalPoolExecutor] = None
+
+    def map_pool(self) -> LocalPoolExecutor:
+        """The map workers' processes, kept between jobs (one job computes at a time): a new pool
+        per job cost every map 0.6-0.9 s of process start and kernel loading. A job takes only its
+        own columns from it (amra_core.boundary.MapRun), so a cancelled job's late results are
+        ignored."""
+        with self._lock:
+            if self._pool is None:
+                self._pool = LocalPoolExecutor(self.settings.map_workers)
+            return self._pool
+
+    def warm_map_pool(self) -> None:
+        """Start the map workers and have each load the solver (a short rigid column), without
+        waiting: ``panel serve --setup``, before any session asks for a map."""
+        pool = self.map_pool()
+        spec = MapSpec(cg_values=(0.40,), gj_min=2500.0)
+        for _ in range(pool.workers):
+            pool.submit(compute_column, spec.column_task(0.40), None)
 
     def subscribe(self, spec: MapSpec, who, on_change=lambda: None) -> MapJob:
         with self._lock:
@@ -282,6 +301,10 @@ class MapRegistry:
             job.join(10.0)
         if self.store is not None:
             self.store.close()
+        with self._lock:
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.close()
 
 
 def get_registry(settings: Optional[ServerSettings] = None) -> MapRegistry:

@@ -1,7 +1,7 @@
 """Server-level settings of the dashboard, read from the environment (set by ``amra serve``).
 
 ``AMRA_STORE``: SQLite store of map cells [path] (default ``~/.cache/amra/cells.sqlite``);
-``AMRA_MAP_WORKERS``: processes for map cells (default 1: cells run in the map's own thread);
+``AMRA_MAP_WORKERS``: processes for map cells (default 1), kept between maps;
 ``AMRA_DASK_SCHEDULER``: optional dask.distributed scheduler address for map cells;
 ``AMRA_MAX_RUN_S``: per-session cap on the simulated run length [s] (default 120).
 """

@@ -56,6 +56,26 @@ def test_a_job_nobody_follows_is_cancelled_and_a_new_request_restarts_it(server_
     reg.close()
 
 
+def test_the_map_workers_stay_between_jobs_and_a_cancelled_job_leaves_nothing_behind(server_settings, wait):
+    """One warmed pool for every job (a new one per map cost 0.6-0.9 s of process start): the warm-up
+    columns and a cancelled job's late columns come back from the shared pool, and must not end the
+    next job early nor enter its map."""
+    reg = MapRegistry(server_settings)
+    reg.warm_map_pool()
+    pool = reg.map_pool()
+    big = reg.subscribe(MapSpec(cg_values=(0.25, 0.3, 0.35, 0.4, 0.45), n_coarse=6), "s")
+    wait(lambda: big.state == "running", 30, what="the job to start")
+    reg.unsubscribe(big, "s")
+    wait(lambda: big.state == "cancelled", 30, what="the cancellation")
+    spec = MapSpec(**{**SMALL, "ea": 0.30})
+    job = reg.subscribe(spec, "s")
+    wait(lambda: job.state == "done", 240, what="the next job")
+    assert reg.map_pool() is pool
+    ref = run_map(spec, workers=1)
+    assert {(c.cg, c.gj_nm2): c.verdict for c in job.all_cells()} == {(c.cg, c.gj_nm2): c.verdict for c in ref.cells}
+    reg.close()
+
+
 def test_only_max_running_jobs_compute_at_once(server_settings, wait):
     reg = MapRegistry(server_settings, max_running=1)
     j1 = reg.subscribe(MapSpec(**SMALL), "s")
