@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel_guard
-from .model import Y_OMEGA, Y_PSI, CompiledModel, stable_time_step
+from .model import S_C, S_R, S_XEA, Y_OMEGA, Y_PSI, CompiledModel, stable_time_step
 
 
 @dataclass(frozen=True)
@@ -24,17 +24,22 @@ class RotorPose:
     """Both blades at one instant. ``r_m`` (n,) station radii [m]; ``flap_m`` (2, n) out-of-plane
     displacement of blades 0 and 1, teeter included, up positive [m]; ``twist_rad`` (2, n) elastic
     twist, nose-up positive [rad]; ``teeter_rad`` hub teeter angle [rad]; ``azimuth_rad`` blade 0's
-    azimuth in [0, 2 pi)."""
+    azimuth in [0, 2 pi); the section a drawing turns by the outermost twist: ``chord_m`` its chord
+    [m], ``x_ea`` its elastic axis [chord fraction]; ``radius_m`` the rotor's radius [m]."""
 
     r_m: np.ndarray
     flap_m: np.ndarray
     twist_rad: np.ndarray
     teeter_rad: float
     azimuth_rad: float
+    chord_m: float
+    x_ea: float
+    radius_m: float
 
     def to_dict(self) -> dict:
         return {"r_m": self.r_m.tolist(), "flap_m": self.flap_m.tolist(), "twist_rad": self.twist_rad.tolist(),
-                "teeter_rad": self.teeter_rad, "azimuth_rad": self.azimuth_rad}
+                "teeter_rad": self.teeter_rad, "azimuth_rad": self.azimuth_rad, "chord_m": self.chord_m,
+                "x_ea": self.x_ea, "radius_m": self.radius_m}
 
 
 def rotor_pose(model: CompiledModel, y: np.ndarray) -> RotorPose:
@@ -42,8 +47,10 @@ def rotor_pose(model: CompiledModel, y: np.ndarray) -> RotorPose:
     out = np.zeros((2, model.n_st, 5))
     kernel_guard.station_loads(np.ascontiguousarray(y, dtype=float), model.arrays, out)
     x, _ = model.physical(y)
-    return RotorPose(model.arrays.st[:, 0].copy(), out[:, :, 4].copy(), out[:, :, 3].copy(), float(x[0]),
-                     float(math.fmod(y[Y_PSI], 2 * math.pi)) % (2 * math.pi))
+    st = model.arrays.st
+    return RotorPose(st[:, S_R].copy(), out[:, :, 4].copy(), out[:, :, 3].copy(), float(x[0]),
+                     float(math.fmod(y[Y_PSI], 2 * math.pi)) % (2 * math.pi), float(st[-1, S_C]),
+                     float(st[-1, S_XEA]), float(model.rotor.radius_m))
 
 
 @dataclass(frozen=True)

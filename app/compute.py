@@ -148,7 +148,7 @@ def mode_frames(rotor, flight, settings, real_part_per_s: float, frequency_hz: f
     """Frames of the trim's mode nearest ``real_part_per_s + i 2 pi frequency_hz`` for
     :class:`app.views.rotor.ModeAnimation`: flap (teeter with it) and twist each scaled to be
     visible (a mode's size is arbitrary), with its true flap-per-twist mix in the ``text``."""
-    from amra_core.pose import mode_animation
+    from amra_core.pose import mode_animation, rotor_pose
     from amra_core.trim import trim
     with np.errstate(all="ignore"):
         tr = trim(compile_model(rotor, flight, settings))
@@ -165,8 +165,10 @@ def mode_frames(rotor, flight, settings, real_part_per_s: float, frequency_hz: f
     text = (f"**{label or 'mode'}**, {abs(a.eigenvalue.imag) / (2 * math.pi):.3g} Hz, real part "
             f"{a.eigenvalue.real:+.3g} 1/s: {kind}. Drawn with flap and twist each scaled to be visible; "
             f"the mode's true mix is {mix}.")
-    return {"r_m": tr.model.arrays.st[:, 0].tolist(), "flap": (a.flap * flap_to_m).tolist(),
-            "twist": twist.tolist(), "teeter": (a.teeter * flap_to_m).tolist(), "text": text}
+    pose = rotor_pose(tr.model, tr.state)
+    return {"r_m": pose.r_m.tolist(), "flap": (a.flap * flap_to_m).tolist(), "twist": twist.tolist(),
+            "teeter": (a.teeter * flap_to_m).tolist(), "text": text, "chord_m": pose.chord_m, "x_ea": pose.x_ea,
+            "radius_m": pose.radius_m}
 
 
 def sensitivity_study(rotor, flight, settings, cg: float, gj_range: tuple, rel_tol: float, n_probe: int) -> dict:

@@ -97,7 +97,13 @@ class RotorDrawing:
         tips.toolbar.logo = None
         return side, tips
 
-    def draw(self, r_m, flap_m, twist_rad, teeter_rad: float) -> None:
+    def draw(self, r_m, flap_m, twist_rad, teeter_rad: float, chord_m: float | None = None,
+             x_ea: float | None = None, radius_m: float | None = None) -> None:
+        """One pose; the tip section's chord [m] and elastic axis [chord fraction] and the radius [m]
+        are the drawn rotor's (the run's or the mode's), when given."""
+        if chord_m is not None and x_ea is not None:
+            self.chord_m, self.x_ea = float(chord_m), float(x_ea)
+        self._fit(radius_m)
         lines = side_view(r_m, flap_m, teeter_rad, self.flap_scale)
         for b in range(2):
             x, y = lines[f"blade{b}"]
@@ -105,6 +111,20 @@ class RotorDrawing:
             sx, sy = tip_section(float(np.asarray(twist_rad)[b][-1]), self.chord_m, self.x_ea, self.twist_scale)
             self.sections[b].data = {"x": sx, "y": sy}
         self.hub.data = {"x": lines["hub"][0], "y": lines["hub"][1]}
+
+    def _fit(self, radius_m: float | None) -> None:
+        """Axis ranges for the radius and chord drawn (the figures are made for the defaults)."""
+        if radius_m is not None:
+            self._look = (float(radius_m),) + self._look[1:]
+        if self._figures is None:
+            return
+        side, tips = self._figures
+        reach, c = 1.05 * self._look[0], 0.8 * self.chord_m
+        if (side.x_range.end, tips.x_range.end) != (reach, c):
+            side.x_range.update(start=-reach, end=reach)
+            side.y_range.update(start=-0.25 * reach, end=0.55 * reach)
+            tips.x_range.update(start=-c, end=c)
+            tips.y_range.update(start=-c, end=c)
 
     def panel(self) -> pn.Row:
         return pn.Row(pn.pane.Bokeh(self.figures[0], sizing_mode="stretch_width"), pn.pane.Bokeh(self.figures[1]),
@@ -125,7 +145,7 @@ class LiveRotor(pn.viewable.Viewer):
     def show(self, ev) -> None:
         p = ev.pose
         self.poses += 1
-        self.drawing.draw(p.r_m, p.flap_m, p.twist_rad, p.teeter_rad)
+        self.drawing.draw(p.r_m, p.flap_m, p.twist_rad, p.teeter_rad, p.chord_m, p.x_ea, p.radius_m)
         self.info.object = (f"t = {ev.t_s:.2f} s · teeter {math.degrees(p.teeter_rad):+.2f}° · tip twist "
                             f"{math.degrees(p.twist_rad[0][-1]):+.2f}° / {math.degrees(p.twist_rad[1][-1]):+.2f}° "
                             f"(blade 0 / 1) · tip flap {100 * p.flap_m[0][-1]:+.1f} / {100 * p.flap_m[1][-1]:+.1f} cm")
@@ -165,7 +185,8 @@ class ModeAnimation(pn.viewable.Viewer):
             return
         f = self.frames
         k = int(k) % len(f["flap"])
-        self.drawing.draw(f["r_m"], f["flap"][k], f["twist"][k], f["teeter"][k])
+        self.drawing.draw(f["r_m"], f["flap"][k], f["twist"][k], f["teeter"][k], f.get("chord_m"), f.get("x_ea"),
+                          f.get("radius_m"))
 
     def __panel__(self):
         return pn.Column(self.info, self.player, self.drawing.panel(), sizing_mode="stretch_width",

@@ -35,6 +35,28 @@ def test_drawing_geometry():
     assert xs.min() == pytest.approx(-0.32 * 0.2) and xs.max() == pytest.approx(0.68 * 0.2)  # EA at the origin
 
 
+def test_the_drawing_turns_the_drawn_rotor_s_section_about_its_own_elastic_axis():
+    """The tip section is the rotor's own (chord and elastic axis of the outermost station, from the
+    pose) and the side view spans its radius: it was always the default rotor's (EA 32 %, chord
+    0.197 m, R 3.81 m), whatever the EA control or an uploaded rotor said."""
+    from amra_core.model import Y_OMEGA, compile_model
+    from amra_core.pose import rotor_pose
+    from app.views.rotor import RotorDrawing
+    rotor = load_preset("paper-boundary").with_overrides(x_ea=0.40)
+    model = compile_model(rotor, FlightCondition(), SolverSettings("rigid"))
+    y = np.zeros(model.n_y); y[Y_OMEGA] = 38.0
+    pose = rotor_pose(model, y)
+    assert pose.x_ea == pytest.approx(0.40) and pose.radius_m == rotor.radius_m
+    assert pose.chord_m == pytest.approx(rotor.stations.at("chord_m", pose.r_m[-1]))
+    drawing = RotorDrawing()
+    side, tips = drawing.figures
+    drawing.draw(pose.r_m, pose.flap_m, pose.twist_rad, pose.teeter_rad, pose.chord_m, pose.x_ea, pose.radius_m)
+    x = np.asarray(drawing.sections[0].data["x"])
+    assert x.min() == pytest.approx(-0.40 * pose.chord_m) and x.max() == pytest.approx(0.60 * pose.chord_m)
+    assert side.x_range.end == pytest.approx(1.05 * rotor.radius_m)
+    assert tips.x_range.end == pytest.approx(0.8 * pose.chord_m)
+
+
 @pytest.mark.parametrize("fidelity", ["rigid", "fem-coupled"])
 def test_mode_frames_are_visible_and_say_the_mode(fidelity):
     rotor = load_preset("paper-boundary").with_overrides(gj_nm2=1500.0, x_ea=0.32, x_cg=0.40)
@@ -49,6 +71,7 @@ def test_mode_frames_are_visible_and_say_the_mode(fidelity):
     assert np.abs(flap).max() == pytest.approx(compute.MODE_FLAP_DRAWN * rotor.radius_m)
     assert np.abs(np.array(out["twist"])).max() == pytest.approx(compute.MODE_TWIST_DRAWN_RAD)
     assert f"{flap_mode.frequency_hz:.3g} Hz" in out["text"] and "cm of tip flap per degree" in out["text"]
+    assert out["x_ea"] == pytest.approx(0.32) and out["radius_m"] == rotor.radius_m
 
 
 def test_the_live_rotor_follows_the_run_and_a_picked_mode_plays(dash, wait):
