@@ -53,6 +53,13 @@ def columns_from_rows(rows: np.ndarray, gj_nm2: float) -> dict:
             "descent_m_s": rows[:, COL["descent_rate_m_s"]].copy(), "gj_nm2": np.full(len(rows), float(gj_nm2))}
 
 
+def _lean(renderer) -> None:
+    """The renderer's unselected and muted looks derived in the browser ("auto", Bokeh's default for
+    a renderer made without the figure's helpers) instead of two more glyph models each in every
+    page: these plots have no selection and no muting."""
+    renderer.update(nonselection_glyph="auto", muted_glyph="auto")
+
+
 def _empty(curves) -> dict:
     return {c: np.zeros(0) for c in ("t_s", *curves, "gj_nm2")}
 
@@ -194,10 +201,11 @@ class LivePlots:
             for col, colour, name in zip(curves, colours, ("blade 0", "blade 1") if len(curves) == 2 else ("run",)):
                 r = fig.line("t_s", col, source=src, line_width=2, color=colour)
                 items.append((name, [r]))
+                _lean(r)
             tips = [("t", "@t_s{0.000} s"), (UNITS[curves[0]][0], f"@{curves[0]}{{0.000}} {UNITS[curves[0]][1]}"),
                     ("GJ", "@gj_nm2{0.0} N m²/rad")]
             fig.add_tools(HoverTool(tooltips=tips, mode="vline", renderers=[r]))
-            fig.vspan(x="t_s", source=self.markers, line_color="#37474f", line_dash="dashed", line_width=1.5)
+            _lean(fig.vspan(x="t_s", source=self.markers, line_color="#37474f", line_dash="dashed", line_width=1.5))
             fig.add_layout(LabelSet(x="t_s", y=4, y_units="screen", text="text", source=self.markers,
                                     text_font_size="11px", text_color="#37474f", x_offset=3))
             if len(curves) == 2:
