@@ -17,7 +17,7 @@ flag                           variable                          default
 ``--prefix P``                 ``AMRA_PREFIX``                   none
 ``--basic-auth FILE``          ``AMRA_BASIC_AUTH``               none
 ``--cookie-secret S``          ``AMRA_COOKIE_SECRET``            random per start (basic auth only)
-``--map-workers N``            ``AMRA_MAP_WORKERS``              1 (1: in the map thread; N: processes)
+``--map-workers N``            ``AMRA_MAP_WORKERS``              1 (processes for map cells, kept between maps)
 ``--dask-scheduler ADDR``      ``AMRA_DASK_SCHEDULER``           none (local processes)
 ``--max-run-s S``              ``AMRA_MAX_RUN_S``                120 (per-session cap on run length)
 ``--max-message-bytes B``      ``AMRA_MAX_MESSAGE_BYTES``        4 MiB (largest websocket message in)
