@@ -310,37 +310,24 @@ def rhs(y, dy, m, loads, work, cw):
         k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
         s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
         h0x = 0.0; h0xd = 0.0; v0x = 0.0
-        if unit_mass:
-            for k in range(ns):
-                q = y[x0 + k]; qd = y[xd0 + k]
-                k0x += m.k0[i, k] * q
-                k2x += m.k2[i, k] * q
-                cxd += m.c[i, k] * qd
-                hx += m.gyh[i, k] * q
-                hxd += m.gyh[i, k] * qd
-                s0x += m.ls2[0, i, k] * q
-                s1x += m.ls2[1, i, k] * q
-                i0x += m.li2[0, i, k] * q
-                i1x += m.li2[1, i, k] * q
-                h0x += m.glh[0, i, k] * q
-                h0xd += m.glh[0, i, k] * qd
-            ux = hx; v0x = h0x
-        else:
-            for k in range(ns):
-                q = y[x0 + k]; qd = y[xd0 + k]
-                k0x += m.k0[i, k] * q
-                k2x += m.k2[i, k] * q
-                cxd += m.c[i, k] * qd
-                hx += m.gyh[i, k] * q
-                hxd += m.gyh[i, k] * qd
+        for k in range(ns):  # (the test of unit_mass is hoisted out of the loop by the compiler)
+            q = y[x0 + k]; qd = y[xd0 + k]
+            k0x += m.k0[i, k] * q
+            k2x += m.k2[i, k] * q
+            cxd += m.c[i, k] * qd
+            hx += m.gyh[i, k] * q
+            hxd += m.gyh[i, k] * qd
+            s0x += m.ls2[0, i, k] * q
+            s1x += m.ls2[1, i, k] * q
+            i0x += m.li2[0, i, k] * q
+            i1x += m.li2[1, i, k] * q
+            h0x += m.glh[0, i, k] * q
+            h0xd += m.glh[0, i, k] * qd
+            if not unit_mass:
                 ux += m.ugyh[i, k] * q
-                s0x += m.ls2[0, i, k] * q
-                s1x += m.ls2[1, i, k] * q
-                i0x += m.li2[0, i, k] * q
-                i1x += m.li2[1, i, k] * q
-                h0x += m.glh[0, i, k] * q
-                h0xd += m.glh[0, i, k] * qd
                 v0x += m.uglh[0, i, k] * q
+        if unit_mass:
+            ux = hx; v0x = h0x
         # blade 1's parts from the totals (glh[0] + glh[1] = gyh, uglh[0] + uglh[1] = ugyh)
         h1x = hx - h0x; h1xd = hxd - h0xd; v1x = ux - v0x
         # flap-lag Coriolis: -d/dx of Omega S_b(x) zeta_b' + 1/2 I_b(x) zeta_b'^2
