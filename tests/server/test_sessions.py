@@ -123,7 +123,10 @@ def test_server_killed_mid_map_resumes_from_the_store(chromium_args, tmp_path):
     env = {"AMRA_STORE": str(store), "AMRA_MAP_WORKERS": "1"}
     from app.app import map_columns
     n_cols = len(map_columns(3))  # 3 asked for, and the paper's 40 % column: 4
-    url_q = "main?map_columns=3&map_coarse=3"
+    # a fem-coupled map (seconds per column), so the kill lands mid-map: a rigid one finishes in about
+    # a second on the warm map workers, before the page has loaded (all four columns were stored at
+    # the kill, CI 2026-12-04)
+    url_q = "main?map_columns=3&map_coarse=3&fidelity=fem-coupled"
     port = free_port()
     srv = start_amra_serve(tmp_path, port, env_extra=env)
     seen = {}
