@@ -62,6 +62,16 @@ def cap_workers(workers: Optional[int]) -> tuple[Optional[int], str]:
     return workers, ""
 
 
+def _start_worker(parent_pid: int, nice: int = 0) -> None:
+    """Worker initializer: ``nice`` added to the worker's niceness, then :func:`_watch_parent`."""
+    if nice > 0:
+        try:
+            os.nice(nice)
+        except OSError:
+            pass
+    _watch_parent(parent_pid)
+
+
 def _watch_parent(parent_pid: int, poll_s: float = 0.5) -> None:
     """Worker initializer: exit this worker as soon as ``parent_pid`` is no longer its parent.
 
@@ -195,7 +205,7 @@ class LocalPoolExecutor(CellExecutor):
     name = "local"
 
     def __init__(self, workers: Optional[int] = None, start_method: str = "spawn",
-                 max_retries: int = MAX_RETRIES):
+                 max_retries: int = MAX_RETRIES, nice: int = 0):
         n = (os.cpu_count() or 1) if workers is None else workers
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
             raise ValueError(f"workers = {workers!r} is not allowed: must be an integer >= 1")
@@ -203,6 +213,7 @@ class LocalPoolExecutor(CellExecutor):
             raise ValueError(f"workers = {workers!r} is not allowed: at most {worker_cap()} "
                              f"({MAX_WORKERS_PER_CORE} per CPU core)")
         self.workers = n
+        self.nice = int(nice)  #: added to the workers' niceness (a server's maps yield to its runs)
         self.max_retries = int(max_retries)
         self._ctx = mp.get_context(start_method)
         self._futures: dict = {}  # future -> [fn, arg, tag, deaths]
@@ -212,7 +223,7 @@ class LocalPoolExecutor(CellExecutor):
 
     def _new_pool(self):
         return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
-                                      initializer=_watch_parent, initargs=(os.getpid(),))
+                                      initializer=_start_worker, initargs=(os.getpid(), self.nice))
 
     def _submit(self, item):
         try:

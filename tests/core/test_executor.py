@@ -19,6 +19,17 @@ def _square(x):
     return x * x
 
 
+def _niceness(_):
+    return os.nice(0)
+
+
+def test_pool_workers_can_run_at_lower_priority():
+    """A server's map workers yield the CPU to its runs: ``nice`` is added to the workers' niceness."""
+    with LocalPoolExecutor(1, nice=5) as ex:
+        (_, out), = list(ex.map_unordered(_niceness, [0]))
+    assert out.ok and out.value == min(os.nice(0) + 5, 19)
+
+
 def _die(x):
     if x == 0:
         os._exit(7)  # a worker crash (segfault, out of memory) seen from the pool
