@@ -145,6 +145,17 @@ def station_aero(ut, up, theta, thd, c, xea, xac, a, x1, x2, theo, rho, a_sound,
 
 
 @inline_kernel
+def section_velocities(om, r, r0, zetad, vx, vup, v0, hs, hc, sp, cp, wdot, wp):
+    """(U_T, U_P) [m/s] at radius ``r`` of a blade at azimuth sine/cosine ``sp``, ``cp``: rotation
+    ``om``, in-plane free stream ``vx``, lag rate ``zetad`` about the pivot at ``r0``; flow up
+    through the disc ``vup`` less the induced velocity (``v0`` and the first harmonics ``hs``,
+    ``hc`` per unit radius), the flap rate ``wdot`` and the free stream along the flap slope ``wp``."""
+    ut = om * r + vx * sp + (r - r0) * zetad
+    up = vup - (v0 + r * (hs * sp + hc * cp)) - wdot - vx * cp * wp
+    return ut, up
+
+
+@inline_kernel
 def station_kinematics(y, m, b, j, vx, vup, sp, cp, hs, hc):
     """Blade ``b``, station ``j``: (U_T, U_P, total pitch, elastic pitch rate, flap slope,
     flap displacement, elastic twist) from the state ``y`` (see :mod:`amra_core.model`).
@@ -162,9 +173,7 @@ def station_kinematics(y, m, b, j, vx, vup, sp, cp, hs, hc):
         wp += m.shd[b, j, k] * q
         th += m.sht[b, j, k] * q
         thd += m.sht[b, j, k] * qd
-    ut = y[Y_OMEGA] * r + vx * sp + (r - p[P_R0]) * y[Y_ZETAD0 + b]
-    vi = y[Y_V0] + r * (hs * sp + hc * cp)
-    up = vup - vi - wdot - vx * cp * wp
+    ut, up = section_velocities(y[Y_OMEGA], r, p[P_R0], y[Y_ZETAD0 + b], vx, vup, y[Y_V0], hs, hc, sp, cp, wdot, wp)
     return ut, up, m.st[j, S_THETA0] + th, thd, wp, w, th
 
 
@@ -246,11 +255,11 @@ def rhs(y, dy, m, loads, work, cw):
             work[W_THD + s] += kin[k, 2 * STATION_STRIDE + s] * qd
     for s in range(nsv):  # the Wagner states, interleaved in y, as rows (a strided copy)
         work[W_LAG1 + s] = y[a0 + 2 * s]; work[W_LAG2 + s] = y[a0 + 2 * s + 1]
-    # the section's flow (velocities as station_kinematics), Wagner state rates, table position
+    # the section's flow, Wagner state rates, table position
     for s in range(nsv):
         r = sv[SV_R, s]; sp = sv[SV_SIGN, s] * sp0; cp = sv[SV_SIGN, s] * cp0
-        ut = om * r + vx * sp + (r - r0) * (zd0 if s < nst else zd1)
-        up = vup - (v0 + r * (hs * sp + hc * cp)) - work[W_WDOT + s] - vx * cp * work[W_WP + s]
+        ut, up = section_velocities(om, r, r0, zd0 if s < nst else zd1, vx, vup, v0, hs, hc, sp, cp,
+                                    work[W_WDOT + s], work[W_WP + s])
         v, wn, uc, d1, d2 = section_flow(ut, up, sv[SV_THETA0, s] + work[W_TH + s], work[W_THD + s],
                                          sv[SV_C, s], sv[SV_XEA, s], work[W_LAG1 + s], work[W_LAG2 + s], theo)
         cell, frac, aw = table_position(atan2(wn, uc), af_alpha0, af_dalpha, n_af)

@@ -17,7 +17,7 @@ from .jit import kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "0093b489aa1f5711"
+CACHE_STAMP = "e2346a8051e238c4"
 
 
 @kernel
