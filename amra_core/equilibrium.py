@@ -21,7 +21,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import root
 
-from . import kernel_guard, kernels
+from . import kernel_guard, kernels, trim_kernels
 from .model import (L_THRUST, L_TORQUE, CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step,
                     transfer_state)
 from .shooting import PeriodicShooting, steps_per_rev
@@ -176,7 +176,6 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
     m = model.with_controls(alpha_s_rad=0.0, airspeed_m_s=0.0, quasi_static=True,
                             hold_omega=omega_hold is not None, hold_vd=False)
     a = m.arrays
-    xs = m.x_slice()
     vh = _hover_induced(m)
     y0 = y0.copy()
     y0[m.xd_slice()] = 0.0
@@ -186,24 +185,23 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
     if not free_omega:
         y0[Y_OMEGA] = omega_hold
 
+    iu, ir = _axial_indices(m, free_omega)
+    kernel_guard.check_state(y0, a)  # shapes checked once here: the residual kernel does not check
+    y_work, dy_work, r_work = np.empty(m.n_y), np.empty(m.n_y), np.empty(len(iu))
+
     def unpack(z):
         y = y0.copy()
-        i = 0
-        if free_omega:
-            y[Y_OMEGA] = z[0]; i = 1
-        y[Y_VD], y[Y_V0] = z[i], z[i + 1]
-        y[4:6] = z[i + 2:i + 4]
-        y[xs] = z[i + 4:]
+        y[iu] = z
         return y
 
     def resid(z):
-        y = unpack(z)
-        kernel_guard.evaluate(y, a, dy, loads)
-        out = [dy[Y_OMEGA]] if free_omega else []
-        out += [dy[Y_VD], dy[Y_V0], dy[6], dy[7]]
-        return np.concatenate([out, dy[m.xd_slice()]])
+        z = np.ascontiguousarray(z, dtype=np.float64)
+        if z.shape != r_work.shape:
+            raise kernel_guard.KernelShapeError(f"trim unknowns have shape {z.shape}, expected {r_work.shape}")
+        trim_kernels.residual_at(z, y0, a, iu, ir, y_work, dy_work, loads, r_work)
+        return r_work.copy()
 
-    z0 = np.concatenate([[y0[Y_OMEGA]] if free_omega else [], [y0[Y_VD], y0[Y_V0]], y0[4:6], y0[xs]])
+    z0 = y0[iu]
 
     def physical(y, ok):
         if not ok:
@@ -235,17 +233,23 @@ def _trim_axial_from(model: CompiledModel, y0: np.ndarray, omega_hold: Optional[
                       0.0, tw, model=model)
 
 
-def _newton_axial(m: CompiledModel, y0: np.ndarray, free_omega: bool) -> Optional[np.ndarray]:
-    """The axial trim by the jitted Newton of :mod:`amra_core.trim_kernels` from ``y0``, or None."""
-    from . import trim_kernels
+def _axial_indices(m: CompiledModel, free_omega: bool) -> tuple:
+    """(unknowns, residuals) of the axial trim as state indices: rotor speed unless held, descent
+    rate, inflow, lag and the static structural coordinates; their rates as the residuals."""
     xs, xds = m.x_slice(), m.xd_slice()
     lead = [Y_OMEGA] if free_omega else []
     iu = np.array(lead + [Y_VD, Y_V0, 4, 5] + list(range(xs.start, xs.stop)), dtype=np.int64)
     ir = np.array(lead + [Y_VD, Y_V0, 6, 7] + list(range(xds.start, xds.stop)), dtype=np.int64)
+    if len(iu) != len(ir) or max(iu.max(), ir.max()) >= m.n_y or min(iu.min(), ir.min()) < 0:
+        raise kernel_guard.KernelShapeError(f"trim unknown/residual indices do not fit a state of length {m.n_y}")
+    return iu, ir
+
+
+def _newton_axial(m: CompiledModel, y0: np.ndarray, free_omega: bool) -> Optional[np.ndarray]:
+    """The axial trim by the jitted Newton of :mod:`amra_core.trim_kernels` from ``y0``, or None."""
+    iu, ir = _axial_indices(m, free_omega)
     y = np.ascontiguousarray(y0, dtype=np.float64).copy()
     kernel_guard.check_state(y, m.arrays)  # shapes checked once here: the Newton kernel does not check
-    if len(iu) != len(ir) or max(iu.max(), ir.max()) >= len(y) or min(iu.min(), ir.min()) < 0:
-        raise kernel_guard.KernelShapeError(f"Newton unknown/residual indices do not fit a state of length {len(y)}")
     it, rn = trim_kernels.newton_axial(y, m.arrays, iu, ir, 1e-8, 40)
     if it < 0 or not np.all(np.isfinite(y)):
         return None

@@ -19,7 +19,9 @@ A failed check raises :class:`KernelShapeError` (a ``ValueError`` naming the arr
 the shape expected). Validated model arrays are remembered by identity (the arrays inside a
 ``ModelArrays`` cannot change shape while it holds them), so the per-call cost in a trim's residual
 loop is a few attribute lookups; the counts in ``p``, which can be edited in place, are re-checked
-every call.
+every call. A new ``ModelArrays`` holding the same arrays with another ``p`` (a model with changed
+controls, :meth:`~amra_core.model.CompiledModel.with_controls`) is recognised by the arrays'
+identity and not checked again.
 """
 from __future__ import annotations
 
@@ -38,7 +40,9 @@ class KernelShapeError(ValueError):
     """An array handed to a kernel has the wrong shape, dtype or layout for the model."""
 
 
-_VALIDATED: "OrderedDict[int, tuple]" = OrderedDict()  # id -> (ModelArrays kept alive, n_s, n_st, inflow3)
+#: id(sv) -> (the ModelArrays last seen, its arrays other than p (kept alive, compared by identity),
+#: (n_s, n_st, inflow3, unit_mass))
+_VALIDATED: "OrderedDict[int, tuple]" = OrderedDict()
 _MAX_VALIDATED = 16
 _LOCK = threading.Lock()  # kernels release the GIL: Panel sessions and thread pools call in parallel
 
@@ -79,9 +83,14 @@ def check_model_arrays(m: ModelArrays) -> tuple:
     if not isinstance(m, ModelArrays):
         raise KernelShapeError(f"model arrays must be a ModelArrays, got {type(m).__name__}")
     ns, nst, inflow3, unit_mass = _counts(m)
+    counts = (ns, nst, inflow3, unit_mass)
     with _LOCK:
-        hit = _VALIDATED.get(id(m))
-    if hit is None or hit[0] is not m or hit[1:] != (ns, nst, inflow3, unit_mass):
+        hit = _VALIDATED.get(id(m.sv))
+    if hit is not None and hit[2] == counts and hit[0] is not m and all(a is b for a, b in zip(hit[1], m[1:])):
+        hit = (m, hit[1], counts)  # the same arrays under another p: remembered for the fast test
+        with _LOCK:
+            _VALIDATED[id(m.sv)] = hit
+    if hit is None or hit[0] is not m or hit[2] != counts:
         for name in ("minv", "k0", "k2", "c", "gyh", "ugyh"):
             _shape(f"ModelArrays.{name}", getattr(m, name), (ns, ns))
         for name in ("sf", "gy0", "ugy0"):
@@ -122,8 +131,8 @@ def check_model_arrays(m: ModelArrays) -> tuple:
         if not (math.isfinite(m.af_dalpha) and m.af_dalpha > 0 and math.isfinite(m.af_alpha0)):
             raise KernelShapeError(f"ModelArrays.af_dalpha = {m.af_dalpha!r} must be a positive finite grid step")
         with _LOCK:
-            _VALIDATED[id(m)] = (m, ns, nst, inflow3, unit_mass)
-            _VALIDATED.move_to_end(id(m))
+            _VALIDATED[id(m.sv)] = (m, tuple(m[1:]), counts)
+            _VALIDATED.move_to_end(id(m.sv))
             while len(_VALIDATED) > _MAX_VALIDATED:
                 _VALIDATED.popitem(last=False)
     n_y = N_Y_FIXED + 2 * ns + 4 * nst + (2 if inflow3 else 0)

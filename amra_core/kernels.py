@@ -29,7 +29,7 @@ from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LO
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "a90d68098cb98967"
+CACHE_STAMP = "ed7c0197110f6a8d"
 
 A1, A2 = WAGNER_A
 B1, B2 = WAGNER_B

@@ -94,10 +94,12 @@ def station_vectors(st: np.ndarray) -> np.ndarray:
     zeros after the last station."""
     nst = st.shape[0]
     sv = np.zeros((N_SV_ROWS, STATION_STRIDE))
-    for row, col in ((SV_R, S_R), (SV_W, S_W), (SV_C, S_C), (SV_XEA, S_XEA), (SV_XAC, S_XAC),
-                     (SV_THETA0, S_THETA0), (SV_A, S_A)):
-        sv[row, :2 * nst] = np.tile(st[:, col], 2)
-    sv[SV_SIGN, :2 * nst] = np.repeat([1.0, -1.0], nst)
+    rows = np.array([SV_R, SV_W, SV_C, SV_XEA, SV_XAC, SV_THETA0, SV_A])
+    cols = st[:, [S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A]].T
+    sv[rows, :nst] = cols
+    sv[rows, nst:2 * nst] = cols
+    sv[SV_SIGN, :nst] = 1.0
+    sv[SV_SIGN, nst:2 * nst] = -1.0
     return sv
 
 

@@ -362,22 +362,37 @@ class CellStore:
                 out[row[0]] = d
         return out
 
-    def put(self, key: str, params, result) -> bool:
-        """Store ``result`` for ``key`` (replacing an earlier one) with the case ``params``.
-        Returns False (nothing written) on a read-only store."""
-        if self.read_only:
-            return False
+    def _row(self, key: str, params, result) -> tuple:
         p = params.to_dict() if hasattr(params, "to_dict") else params
         r = result.to_dict() if hasattr(result, "to_dict") else result
         ps = json.dumps(_clean(p), sort_keys=True, allow_nan=False)
         rs = json.dumps(_clean(r), sort_keys=True, allow_nan=False)
-        row = (key, ps, rs, self.solver, time.time(), row_checksum(key, ps, rs, self.solver))
+        return (key, ps, rs, self.solver, time.time(), row_checksum(key, ps, rs, self.solver))
+
+    def put(self, key: str, params, result) -> bool:
+        """Store ``result`` for ``key`` (replacing an earlier one) with the case ``params``.
+        Returns False (nothing written) on a read-only store."""
+        return self.put_many([(key, params, result)])
+
+    def put_many(self, items) -> bool:
+        """Store every ``(key, params, result)`` of ``items`` in one transaction: all of them or,
+        if writing fails, none (a map's column and its record go in together). Returns False
+        (nothing written) on a read-only store."""
+        if self.read_only:
+            return False
+        rows = [self._row(k, p, r) for k, p, r in items]
         with self._lock:
-            self._conn.execute("INSERT OR REPLACE INTO cells (key, params, result, solver, created, checksum) "
-                               "VALUES (?, ?, ?, ?, ?, ?)", row)
-        with self._lock:
-            if key in self.damaged_rows:
-                self.damaged_rows.remove(key)
+            self._conn.execute("BEGIN IMMEDIATE")
+            try:
+                self._conn.executemany("INSERT OR REPLACE INTO cells (key, params, result, solver, created, "
+                                       "checksum) VALUES (?, ?, ?, ?, ?, ?)", rows)
+                self._conn.execute("COMMIT")
+            except BaseException:
+                self._conn.execute("ROLLBACK")
+                raise
+            for row in rows:
+                if row[0] in self.damaged_rows:
+                    self.damaged_rows.remove(row[0])
         return True
 
     def __contains__(self, key: str) -> bool:

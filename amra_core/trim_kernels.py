@@ -17,7 +17,7 @@ from .jit import kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "e2346a8051e238c4"
+CACHE_STAMP = "abeb667d6e23caf8"
 
 
 @kernel
@@ -25,6 +25,16 @@ def _resid(y, m, ir, dy, loads, out):
     kernels.evaluate(y, m, dy, loads)
     for k in range(len(ir)):
         out[k] = dy[ir[k]]
+
+
+@kernel
+def residual_at(z, y0, m, iu, ir, y, dy, loads, out):
+    """The residuals ``dy[ir]`` at the state ``y0`` with ``y[iu] = z`` (``y``, ``dy``, ``loads``:
+    work arrays; ``out``: the residuals), for ``scipy.optimize.root`` where the Newton fails."""
+    y[:] = y0
+    for j in range(len(iu)):
+        y[iu[j]] = z[j]
+    _resid(y, m, ir, dy, loads, out)
 
 
 @kernel

@@ -80,16 +80,15 @@ class MapRun:
         crit = "inf" if col.critical_gj is not None and math.isinf(col.critical_gj) else col.critical_gj
         record = {"key": spec.column_key(col.cg), "gj": [c.gj_nm2 for c in col.cells], "intervals": col.intervals,
                   "critical_gj": crit, "fold_gj": col.fold_gj}
-        top = None
+        items, top = [], None
         for c in col.cells:  # the top cell last: its column record says the column is complete
             if c.gj_nm2 == top_gj:
                 top = c
-                continue
-            self._put(spec.key(col.cg, c.gj_nm2), spec.case_params(col.cg, c.gj_nm2), c)
-            if self.store is None:
-                return
+            else:
+                items.append((spec.key(col.cg, c.gj_nm2), spec.case_params(col.cg, c.gj_nm2), c))
         if top is not None:
-            self._put(spec.key(col.cg, top_gj), spec.case_params(col.cg, top_gj), {**top.to_dict(), "column": record})
+            items.append((spec.key(col.cg, top_gj), spec.case_params(col.cg, top_gj), {**top.to_dict(), "column": record}))
+        self._put(items)
 
     def _finish_column(self, col: ColumnResult, cached: bool, streamed: bool):
         """Record a finished column; yields the cells not handed out yet."""
@@ -220,11 +219,16 @@ class MapRun:
                 col_cancel.set()  # a walk still running (cancelled, or the consumer stopped) ends at its next point
                 th.join(timeout=30.0)
 
-    def _put(self, key, params, cell) -> None:
-        """Store a finished cell; a store that fails while writing (disk full, locked for longer
-        than its busy timeout) is reported once and the map carries on without it."""
+    def _put(self, items: list) -> None:
+        """Store a finished column's cells ``(key, params, cell)`` (one transaction where the store
+        has ``put_many``); a store that fails while writing (disk full, locked for longer than its
+        busy timeout) is reported once and the map carries on without it."""
         try:
-            self.store.put(key, params, cell)
+            if hasattr(self.store, "put_many"):
+                self.store.put_many(items)
+            else:
+                for key, params, cell in items:
+                    self.store.put(key, params, cell)
         except Exception as exc:  # noqa: BLE001 - the map is worth more than its cache
             import warnings
             self.store_error = f"result store write failed ({type(exc).__name__}: {exc}); continuing without it"

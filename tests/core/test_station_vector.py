@@ -96,3 +96,23 @@ def test_the_guard_refuses_station_vectors_that_are_not_the_station_table(mccutc
         bad = a.arrays._replace(**{field: getattr(a.arrays, field) * 1.01})
         with pytest.raises(kernel_guard.KernelShapeError, match=field):
             kernel_guard.evaluate(y, bad, np.zeros(a.n_y), np.zeros(8))
+
+
+def test_the_guard_rechecks_p_of_a_model_with_changed_controls(mccutcheon):
+    """A model with changed controls holds the same arrays under a new ``p``: the guard does not
+    check the arrays again, but still checks the counts in that ``p``, and a tuple that swaps in
+    any other array is checked in full."""
+    a = compile_model(mccutcheon, FlightCondition(), SolverSettings("fem-coupled"))
+    y = np.zeros(a.n_y); y[1] = 38.0
+    dy, loads = np.zeros(a.n_y), np.zeros(8)
+    kernel_guard.evaluate(y, a.arrays, dy, loads)
+    held = a.with_controls(airspeed_m_s=10.0, hold_omega=True)
+    assert held.arrays.sv is a.arrays.sv and held.arrays.p is not a.arrays.p
+    kernel_guard.evaluate(y, held.arrays, dy, loads)  # accepted
+    for slot, value in ((P_NS, a.n_s + 1.0), (P_NST, a.n_st - 1.0)):
+        p = held.arrays.p.copy(); p[slot] = value
+        with pytest.raises(kernel_guard.KernelShapeError):
+            kernel_guard.evaluate(y, held.arrays._replace(p=p), dy, loads)
+    bad = held.arrays._replace(kin=held.arrays.kin * 1.01)
+    with pytest.raises(kernel_guard.KernelShapeError, match="kin"):
+        kernel_guard.evaluate(y, bad, dy, loads)

@@ -40,6 +40,22 @@ def test_round_trip_and_wal(tmp_path):
         assert st.notice == "" and len(st) == 2
 
 
+def test_put_many_writes_all_or_nothing(tmp_path):
+    """A map's column goes to the store in one transaction: a row the database refuses leaves
+    none of the others behind (a column record is never stored without its cells)."""
+    p = tmp_path / "s.sqlite"
+    with CellStore(p, solver="x") as st:
+        assert st.put_many([(f"k{i}", {"i": i}, _result(i)) for i in range(3)])
+        assert [CellResult.from_dict(st.get(f"k{i}")) for i in range(3)] == [_result(i) for i in range(3)]
+        st._conn.execute("CREATE TRIGGER refuse BEFORE INSERT ON cells WHEN NEW.key = 'bad' "
+                         "BEGIN SELECT RAISE(ABORT, 'refused'); END")
+        with pytest.raises(sqlite3.DatabaseError, match="refused"):
+            st.put_many([("new", {"i": 9}, _result(9)), ("bad", {}, _result(8))])
+        assert st.get("new") is None and len(st) == 3
+        st.put("new", {"i": 9}, _result(9))  # the connection is usable afterwards
+        assert CellResult.from_dict(st.get("new")) == _result(9)
+
+
 def _writer(path, wid, n):
     st = CellStore(path, solver="w")
     for i in range(n):

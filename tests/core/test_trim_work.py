@@ -108,3 +108,24 @@ def test_a_map_blade_keeps_the_30x_stiff_start(mccutcheon, monkeypatch):
     res = trim(compile_model(mccutcheon.with_overrides(gj_nm2=3000.0), FlightCondition(), SolverSettings("rigid")))
     assert res.status == "trimmed"
     assert compiled[0] == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize("fidelity", ["rigid", "fem-coupled"])
+@pytest.mark.parametrize("free_omega", [True, False])
+def test_the_fallback_residual_kernel_is_the_right_hand_side(mccutcheon, fidelity, free_omega):
+    """scipy's hybr (the axial trim's fallback) calls a jitted residual: the rates of the full
+    right-hand side at the state with the unknowns set, in the Newton's order, bit for bit."""
+    import numpy as np
+    from amra_core import kernel_guard, trim_kernels
+    m = compile_model(mccutcheon, FlightCondition(), SolverSettings(fidelity)).with_controls(quasi_static=True)
+    iu, ir = equilibrium._axial_indices(m, free_omega)
+    rng = np.random.default_rng(7)
+    y0 = np.zeros(m.n_y); y0[1] = 38.0; y0[2] = -10.0; y0[3] = 8.0
+    work, dy_k, out = np.empty(m.n_y), np.empty(m.n_y), np.empty(len(iu))
+    for _ in range(5):
+        z = y0[iu] + 0.01 * rng.standard_normal(len(iu))
+        trim_kernels.residual_at(z, y0, m.arrays, iu, ir, work, dy_k, np.zeros(8), out)
+        y = y0.copy(); y[iu] = z
+        dy = np.zeros(m.n_y)
+        kernel_guard.evaluate(y, m.arrays, dy, np.zeros(8))
+        np.testing.assert_array_equal(out, dy[ir])
