@@ -63,7 +63,10 @@ def cap_workers(workers: Optional[int]) -> tuple[Optional[int], str]:
 
 
 def _start_worker(parent_pid: int, nice: int = 0) -> None:
-    """Worker initializer: ``nice`` added to the worker's niceness, then :func:`_watch_parent`."""
+    """Worker initializer: ``nice`` added to the worker's niceness, one BLAS thread
+    (:func:`~amra_core.blas_threads.use_one_blas_thread`), then :func:`_watch_parent`."""
+    from .blas_threads import use_one_blas_thread
+    use_one_blas_thread()
     if nice > 0:
         try:
             os.nice(nice)

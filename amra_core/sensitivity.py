@@ -274,7 +274,9 @@ def sensitivity(rotor: Rotor, cg: float, *, ea: Optional[float] = None, settings
     todo = [base_job] + jobs
     if workers > 1:
         from concurrent.futures import ProcessPoolExecutor
-        with ProcessPoolExecutor(max_workers=int(workers)) as ex:
+
+        from .blas_threads import use_one_blas_thread
+        with ProcessPoolExecutor(max_workers=int(workers), initializer=use_one_blas_thread) as ex:
             futs = [ex.submit(_walk, j) for j in todo]
             for i, fu in enumerate(futs):
                 check_cancel()

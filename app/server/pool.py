@@ -31,6 +31,14 @@ def lower_priority_of_this_thread(nice: int = BACKGROUND_NICE) -> None:
         pass
 
 
+def start_pool_worker(nice: int) -> None:
+    """Pool worker initializer: one BLAS thread (the pools already run a process per core), then
+    :func:`lower_priority_of_this_thread`."""
+    from amra_core.blas_threads import use_one_blas_thread
+    use_one_blas_thread()
+    lower_priority_of_this_thread(nice)
+
+
 class AnalysisPool:
     """``workers`` spawned processes (spawn: the server holds threads, fork could deadlock) at
     niceness ``nice``; a pool whose worker died is replaced for what follows."""
@@ -42,7 +50,7 @@ class AnalysisPool:
 
     def _new_pool(self):
         return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=mp.get_context("spawn"),
-                                      initializer=lower_priority_of_this_thread, initargs=(self.nice,))
+                                      initializer=start_pool_worker, initargs=(self.nice,))
 
     def submit(self, fn, *args) -> cf.Future:
         with self._lock:

@@ -125,6 +125,22 @@ def test_the_trim_runs_in_the_run_pool(wait, analysis_pool):
     assert rec.of(Finished)[0].status == "completed" and s.sim is not None
 
 
+def _blas_threads_and_niceness():
+    import os
+
+    from threadpoolctl import threadpool_info
+    return [i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"], os.nice(0)
+
+
+def test_the_server_pools_run_one_blas_thread_at_background_priority(analysis_pool):
+    """The server's pools run beside the map workers: one BLAS thread each (no OpenBLAS threads
+    spinning on every core), at the background niceness."""
+    from app.server.pool import BACKGROUND_NICE
+    threads, niceness = analysis_pool.submit(_blas_threads_and_niceness).result(timeout=120)
+    assert threads and all(n == 1 for n in threads), threads
+    assert niceness >= BACKGROUND_NICE
+
+
 def test_an_empty_batch_of_rows_never_reaches_the_views():
     """A run's first batch is its history so far, which may hold no row; delivered alone (a slow
     machine delivers between two posts) it must not reach a view as a batch without rows."""

@@ -30,6 +30,21 @@ def test_pool_workers_can_run_at_lower_priority():
     assert out.ok and out.value == min(os.nice(0) + 5, 19)
 
 
+def _blas_threads(_):
+    from threadpoolctl import threadpool_info
+    return [(i["filepath"], i["num_threads"]) for i in threadpool_info() if i["user_api"] == "blas"]
+
+
+def test_pool_workers_run_one_blas_thread_each():
+    """A pool already runs a worker per core: OpenBLAS's own threads in every worker would take each
+    other's cycles (fem-coupled mu 0.1 map: 72.5 s with them, 47.1 s without). NumPy's and SciPy's
+    BLAS are both limited to one thread in the workers."""
+    with LocalPoolExecutor(1) as ex:
+        (_, out), = list(ex.map_unordered(_blas_threads, [0]))
+    assert out.ok
+    assert len(out.value) >= 1 and all(n == 1 for _, n in out.value), out.value
+
+
 def _die(x):
     if x == 0:
         os._exit(7)  # a worker crash (segfault, out of memory) seen from the pool
