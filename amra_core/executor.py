@@ -298,10 +298,13 @@ class LocalPoolExecutor(CellExecutor):
         self._futures.clear()
 
     def close(self):
+        """Release the workers: idle ones exit and are waited for (an interpreter that exits while
+        the pool's manager thread still closes its pipes prints a ``Bad file descriptor`` traceback,
+        Python 3.11); workers running cells nobody will read are stopped."""
         if self._abandoned or self._futures:
             _terminate_pool(self._pool)  # do not wait for cells nobody will read
         else:
-            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool.shutdown(wait=True, cancel_futures=True)
         self._futures.clear()
 
 

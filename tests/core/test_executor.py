@@ -69,6 +69,18 @@ def test_batch_yields_every_result_and_failures_as_outcomes(make):
     assert not got[3].ok and got[3].reason == "ZeroDivisionError: three is bad"
 
 
+def test_close_leaves_no_worker_behind():
+    """``close()`` of an idle pool waits for its workers to exit, so a program that exits right
+    after it leaves nothing running (and its interpreter no pool shutting down)."""
+    import multiprocessing as mp
+    ex = LocalPoolExecutor(2)
+    assert sorted(o.value for _, o in ex.map_unordered(_square, [1, 2, 4])) == [1, 4, 16]
+    workers = list(ex._pool._processes.values())
+    ex.close()
+    assert workers and not any(p.is_alive() for p in workers)
+    assert not [p for p in mp.active_children() if p in workers]
+
+
 def test_pool_survives_a_dead_worker():
     """A call whose worker always dies is retried on fresh pools, then reported as WorkerDied
     (never as an answer); the pool keeps working afterwards."""
