@@ -32,6 +32,15 @@ TICK_S = 0.06  #: wall-clock period of a chunk [s]
 DELIVERY_PERIOD_S = 0.1  #: shortest interval between deliveries to the views [s]: 10 updates/s
 TRIM_PROGRESS_PERIOD_S = 0.5  #: period of the trim's progress line [s]
 VIEWS_PERIOD_S = 1.0  #: wall-clock period of the clock, the "so far" verdict and the disc during a run [s]
+#: share of a core a run's "so far" verdict may take: the verdict reads the whole history (37 ms at
+#: 120 s of a forward-flight run here), so on long runs it comes less often than every VIEWS_PERIOD_S
+#: (32 sessions re-judging every second starved the server's event loop: no live change got through)
+VERDICT_CPU_SHARE = 0.02
+
+
+def next_verdict_in_s(cost_s: float) -> float:
+    """Wall time [s] until the next "so far" verdict of a run whose last one took ``cost_s`` [s]."""
+    return max(VIEWS_PERIOD_S, cost_s / VERDICT_CPU_SHARE)
 log = logging.getLogger("amra.session")
 
 
@@ -211,6 +220,7 @@ class Session:
             self._pending.update({k: v for k, v in values.items() if v is not None})
         if "gj_nm2" in values:
             self._live_since = (float(values["gj_nm2"]), time.perf_counter())
+        log.debug("live change received: %s", values)
 
     def set_speed(self, speed: float) -> None:
         with self._lock:
@@ -244,7 +254,7 @@ class Session:
         post(RunStatus(run_id, "running", "running"))
         post(Rows(run_id, sim.history, gj, sim.t))
         t_end = case.t_end_s
-        next_tick = last_views = time.perf_counter()
+        next_tick = last_views = next_verdict = time.perf_counter()
         try:
             while not stop.is_set() and sim.status == "running" and sim.t < t_end - 1e-9:
                 with self._lock:
@@ -268,7 +278,10 @@ class Session:
                 if time.perf_counter() - last_views >= VIEWS_PERIOD_S:
                     last_views = time.perf_counter()
                     post(RunStatus(run_id, "running", f"running, t = {sim.t:.2f} s", float(sim.y[Y_OMEGA])))
-                    self._post_views(sim, run_id, final=False)
+                    judge = last_views >= next_verdict
+                    self._post_views(sim, run_id, final=False, verdict=judge)
+                    if judge:
+                        next_verdict = last_views + next_verdict_in_s(time.perf_counter() - last_views)
                 next_tick += TICK_S
                 delay = next_tick - time.perf_counter()
                 if delay > 0:
@@ -280,14 +293,16 @@ class Session:
         self._post_views(sim, run_id, final=True)
         status = "completed" if sim.status == "running" else sim.status
         post(Finished(run_id, sim.history, status, stop.is_set(), sim.t))
+        log.info("run %d ended at t = %.2f s (%s%s)", run_id, sim.t, status, ", stopped" if stop.is_set() else "")
         post(RunStatus(run_id, "idle", f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s "
                                        f"({status})", float(sim.y[Y_OMEGA]) if len(sim.history) else None))
 
-    def _post_views(self, sim: Simulation, run_id: int, final: bool) -> None:
+    def _post_views(self, sim: Simulation, run_id: int, final: bool, verdict: bool = True) -> None:
         status = ("completed" if sim.status == "running" else sim.status) if final else sim.status
         try:
-            with np.errstate(all="ignore"):
-                self.post(VerdictNews(run_id, sim.verdict(), final, status, sim.start_note))
+            if verdict:
+                with np.errstate(all="ignore"):
+                    self.post(VerdictNews(run_id, sim.verdict(), final, status, sim.start_note))
         except Exception as exc:  # noqa: BLE001 - too short a run to judge
             if final:
                 self.post(Notice(f"no verdict: {exc}"))

@@ -125,6 +125,15 @@ def test_the_trim_runs_in_the_run_pool(wait, analysis_pool):
     assert rec.of(Finished)[0].status == "completed" and s.sim is not None
 
 
+def test_a_long_run_judges_so_far_less_often_than_every_second():
+    """The "so far" verdict reads the whole history: it may take VERDICT_CPU_SHARE of a core, so a
+    verdict that took 37 ms (a 120 s run) comes every 1.85 s, a quick one every VIEWS_PERIOD_S."""
+    from app.session import VERDICT_CPU_SHARE, VIEWS_PERIOD_S, next_verdict_in_s
+    assert next_verdict_in_s(0.001) == VIEWS_PERIOD_S
+    assert next_verdict_in_s(0.037) == pytest.approx(0.037 / VERDICT_CPU_SHARE)
+    assert next_verdict_in_s(0.037) > VIEWS_PERIOD_S
+
+
 def _blas_threads_and_niceness():
     import os
 
