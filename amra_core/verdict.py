@@ -159,8 +159,9 @@ def _envelope_series(t, e, window):
     edges = np.arange(t[0], t[-1] + window, window)
     tc, ec = [], []
     for a, b, sel, count in _windows(t, edges):
-        if count >= 2 and e[sel].max() > 0:
-            tc.append(0.5 * (a + b)); ec.append(e[sel].max())
+        peak = e[sel].max() if count >= 2 else 0.0
+        if peak > 0:
+            tc.append(0.5 * (a + b)); ec.append(peak)
     if len(tc) < 3:
         return None
     return np.array(tc), np.log(np.array(ec))

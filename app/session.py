@@ -36,12 +36,12 @@ VIEWS_PERIOD_S = 1.0  #: wall-clock period of the clock, the "so far" verdict an
 #: 120 s of a forward-flight run here), so on long runs it comes less often than every VIEWS_PERIOD_S
 #: (32 sessions re-judging every second starved the server's event loop: no live change got through)
 VERDICT_CPU_SHARE = 0.02
+log = logging.getLogger("amra.session")
 
 
 def next_verdict_in_s(cost_s: float) -> float:
     """Wall time [s] until the next "so far" verdict of a run whose last one took ``cost_s`` [s]."""
     return max(VIEWS_PERIOD_S, cost_s / VERDICT_CPU_SHARE)
-log = logging.getLogger("amra.session")
 
 
 class Throttle:
@@ -278,10 +278,9 @@ class Session:
                 if time.perf_counter() - last_views >= VIEWS_PERIOD_S:
                     last_views = time.perf_counter()
                     post(RunStatus(run_id, "running", f"running, t = {sim.t:.2f} s", float(sim.y[Y_OMEGA])))
-                    judge = last_views >= next_verdict
-                    self._post_views(sim, run_id, final=False, verdict=judge)
-                    if judge:
-                        next_verdict = last_views + next_verdict_in_s(time.perf_counter() - last_views)
+                    cost_s = self._post_views(sim, run_id, final=False, verdict=last_views >= next_verdict)
+                    if cost_s is not None:
+                        next_verdict = last_views + next_verdict_in_s(cost_s)
                 next_tick += TICK_S
                 delay = next_tick - time.perf_counter()
                 if delay > 0:
@@ -297,18 +296,23 @@ class Session:
         post(RunStatus(run_id, "idle", f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s "
                                        f"({status})", float(sim.y[Y_OMEGA]) if len(sim.history) else None))
 
-    def _post_views(self, sim: Simulation, run_id: int, final: bool, verdict: bool = True) -> None:
+    def _post_views(self, sim: Simulation, run_id: int, final: bool, verdict: bool = True) -> Optional[float]:
+        """Post the verdict (if ``verdict``) and the disc; returns the verdict's time [s], or None."""
         status = ("completed" if sim.status == "running" else sim.status) if final else sim.status
-        try:
-            if verdict:
+        cost_s = None
+        if verdict:
+            t0 = time.perf_counter()
+            try:
                 with np.errstate(all="ignore"):
                     self.post(VerdictNews(run_id, sim.verdict(), final, status, sim.start_note))
-        except Exception as exc:  # noqa: BLE001 - too short a run to judge
-            if final:
-                self.post(Notice(f"no verdict: {exc}"))
+            except Exception as exc:  # noqa: BLE001 - too short a run to judge
+                if final:
+                    self.post(Notice(f"no verdict: {exc}"))
+            cost_s = time.perf_counter() - t0
         try:
             disc = sim.spanwise_last_revolution()
             if disc:
                 self.post(Disc(run_id, disc))
         except Exception:  # noqa: BLE001 - the disc plots are optional
             pass
+        return cost_s

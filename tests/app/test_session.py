@@ -134,6 +134,35 @@ def test_a_long_run_judges_so_far_less_often_than_every_second():
     assert next_verdict_in_s(0.037) > VIEWS_PERIOD_S
 
 
+@pytest.mark.parametrize("verdict_period_s, so_far", [(0.0, "at least 2"), (1000.0, "exactly 1")])
+def test_the_run_loop_spaces_its_so_far_verdicts_by_their_cost(wait, monkeypatch, verdict_period_s, so_far):
+    """A 3 s run at playback 1x passes the views' 1 s tick at least twice: when next_verdict_in_s
+    allows it, each tick judges; when it asks for a long wait, the run judges once (the first tick)
+    until its final verdict, while the clock still ticks. (The wait is set here: the real one
+    follows the verdict's measured time, and a first verdict in a process can take over 20 ms.)"""
+    import app.session as session_module
+    costs = []
+
+    def period(cost_s):
+        costs.append(cost_s)
+        return verdict_period_s
+    monkeypatch.setattr(session_module, "next_verdict_in_s", period)
+    s = Session()
+    rec = Recorder(s)
+    s.start(_case(run_s=3.0), speed=1.0)
+    run_until(s, lambda: rec.of(Finished), wait, 120, what="the run")
+    s.deliver()
+    so_far_verdicts = [v for v in rec.of(VerdictNews) if not v.final]
+    clock = [r for r in rec.of(RunStatus) if r.text.startswith("running, t =")]
+    assert len(clock) >= 2  # the views' tick came at least twice
+    assert any(v.final for v in rec.of(VerdictNews))
+    assert len(costs) == len(so_far_verdicts) and all(c > 0 for c in costs)  # each verdict timed
+    if so_far == "exactly 1":
+        assert len(so_far_verdicts) == 1
+    else:
+        assert len(so_far_verdicts) >= 2
+
+
 def _blas_threads_and_niceness():
     import os
 
