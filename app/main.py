@@ -23,7 +23,8 @@ def create_app():
     """Build a fresh page for one session."""
     serve_resources_locally()
     pn.extension(notifications=True, throttled=True)
-    hv.extension("bokeh", logo=False)
+    if "bokeh" not in hv.Store.renderers:  # loaded once per process (--setup app/warmup.py), not per page
+        hv.extension("bokeh", logo=False)
     # 2-D canvas, not WebGL: the plots are small, and without a GPU WebGL is drawn in software
     hv.renderer("bokeh").webgl = False
     settings = ServerSettings.from_env()
@@ -51,7 +52,8 @@ if __name__.startswith("bokeh"):
     import time
 
     t0 = time.perf_counter()
-    create_app().servable(title=TITLE)  # the page's Bokeh models are built here
+    with pn.io.hold(freeze=True):  # one recomputation of the document's references, not one per root
+        create_app().servable(title=TITLE)  # the page's Bokeh models are built here
     logging.getLogger("amra.page").info("page built in %.3f s (server time)", time.perf_counter() - t0)
 elif __name__ == "__main__":
     pn.serve(create_app, port=5006, address="127.0.0.1", show=False)

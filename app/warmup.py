@@ -7,6 +7,7 @@ too), so the first user does not wait for the JIT.
 from __future__ import annotations
 
 if __name__ in ("panel_setup_module", "__main__"):
+    import gc
     import logging
     import os
 
@@ -27,3 +28,4 @@ if __name__ in ("panel_setup_module", "__main__"):
     get_run_pool().submit(warm_worker)
     hv.extension("bokeh", logo=False)
     print(f"AMRA warm-up: kernels ready in {warm():.1f} s", flush=True)
+    gc.freeze()  # the imported libraries stay: later collections do not walk them again
