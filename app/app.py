@@ -93,6 +93,7 @@ class Dashboard(pn.viewable.Viewer):
         self.last_history: Optional[np.ndarray] = None
         self._locus_key = None
         self._run_preset = "custom"  #: the preset the current run was started with
+        self.live_bar: Optional[pn.Row] = None  #: presentation mode's header bar, made when first shown
         self.refresh = s.throttle(self.refresh_analyses, REFRESH_PERIOD_S)
         s.subscribe(Rows, lambda ev: self.live.append(columns_from_rows(ev.rows, ev.gj_nm2)))
         s.subscribe(Finished, self._finished)
@@ -305,25 +306,41 @@ class Dashboard(pn.viewable.Viewer):
                    button(c.param.stop, button_type="warning", css_classes=["amra-stop"]),
                    button(c.param.reset, button_type="light", css_classes=["amra-reset"])),
             button(c.param.ladder, sizing_mode="stretch_width", css_classes=["amra-ladder"]),
-            pn.Card(num("airspeed_m_s"), num("omega_hold_rad_s"), num("map_columns", widget_cls=pn.widgets.IntInput),
-                    num("map_coarse", widget_cls=pn.widgets.IntInput), title="Advanced: flight and map grid",
-                    collapsed=True, sizing_mode="stretch_width"),
+            self._advanced(num),
             self.exports.panel(), sizing_mode="stretch_width", name="sidebar")
 
+    @staticmethod
+    def _advanced(num) -> pn.Card:
+        """The collapsed card of flight and map-grid inputs; its inputs are made when it is first opened."""
+        card = pn.Card(title="Advanced: flight and map grid", collapsed=True, sizing_mode="stretch_width",
+                       css_classes=["amra-advanced"])
+
+        def opened(event):
+            if not event.new and not len(card):
+                card.extend([num("airspeed_m_s"), num("omega_hold_rad_s"),
+                             num("map_columns", widget_cls=pn.widgets.IntInput),
+                             num("map_coarse", widget_cls=pn.widgets.IntInput)])
+        card.param.watch(opened, "collapsed")
+        return card
+
     def header(self) -> pn.Row:
-        """The presentation toggle, and in presentation mode Run, Stop, a large GJ input and the verdict."""
+        """The presentation toggle; in presentation mode also the live bar (:meth:`_live_bar`)."""
+        toggle = pn.widgets.Toggle.from_param(self.controls.param.present, button_type="light", width=170,
+                                              css_classes=["amra-present"], margin=(10, 10))
+        self.head = pn.Row(toggle, sizing_mode="stretch_width")
+        return self.head
+
+    def _live_bar(self) -> pn.Row:
+        """Run, Stop, a large GJ input and the verdict, for a projector (made when first shown)."""
         c = self.controls
         big = {"styles": {"font-size": "20px"}, "stylesheets": [":host input {font-size: 20px; height: 40px}"]}
         button = pn.widgets.Button.from_param
-        self.live_bar = pn.Row(
+        return pn.Row(
             button(c.param.run, button_type="primary", css_classes=["amra-present-run"], width=110, height=44,
                    description=None),
             button(c.param.stop, button_type="warning", width=110, height=44, description=None),
             checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, **big),
-            self.status.badge, visible=c.present, margin=0)
-        toggle = pn.widgets.Toggle.from_param(c.param.present, button_type="light", width=170,
-                                              css_classes=["amra-present"], margin=(10, 10))
-        return pn.Row(toggle, self.live_bar, sizing_mode="stretch_width")
+            self.status.badge, margin=0)
 
     def main(self) -> pn.Column:
         self.top = pn.Row(self.status, pn.Column(self.alert, sizing_mode="stretch_width"),
@@ -340,7 +357,11 @@ class Dashboard(pn.viewable.Viewer):
         and the top status row stepping aside."""
         self.live.present(on)
         self.top.visible = not on
-        self.live_bar.visible = on
+        if on and self.live_bar is None:
+            self.live_bar = self._live_bar()
+            self.head.append(self.live_bar)
+        if self.live_bar is not None:
+            self.live_bar.visible = on
 
     def views(self) -> pn.Tabs:
         """The analysis views, one tab each; a tab's models are built when it is first shown."""

@@ -283,3 +283,19 @@ def test_a_hidden_tab_builds_its_figures_only_when_it_is_shown(dash):
     tabs.active = 2  # "Live rotor"
     side, tips = dash.rotor_view.drawing._figures
     assert side.title.text.startswith("Live rotor.") and tips.title.text.startswith("Tip sections")
+
+
+def test_the_advanced_card_makes_its_inputs_when_first_opened(dash):
+    """The collapsed card holds no models at page build; opened, its inputs show the controls' values
+    and set them (issue 22: page build <= 0.3 s server time)."""
+    card = next(o for o in dash.sidebar().objects if "amra-advanced" in (getattr(o, "css_classes", None) or []))
+    assert card.collapsed and len(card) == 0
+    dash.controls.airspeed_m_s = 12.0
+    card.collapsed = False
+    assert len(card) == 4
+    airspeed = card[0][0]
+    assert airspeed.value == 12.0
+    airspeed.value = 15.0
+    assert dash.controls.airspeed_m_s == 15.0
+    card.collapsed, card.collapsed = True, False  # closed and opened again: the same four inputs
+    assert len(card) == 4

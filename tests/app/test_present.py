@@ -12,6 +12,7 @@ def test_the_toggle_switches_the_page(dash):
     hv.extension("bokeh")
     page = dash.__panel__()  # builds the header and the main area
     assert not dash.controls.present and dash.top.visible
+    assert dash.live_bar is None and len(page.header[0]) == 1  # the live bar is made when first shown
     assert all(f.height == NORMAL_HEIGHT for f in dash.live.figures_made)
     dash.controls.present = True
     assert not dash.top.visible
