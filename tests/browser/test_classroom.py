@@ -67,6 +67,26 @@ def test_presentation_mode_fits_a_projector(watched_page, dashboard_server):
     shot(page, "c02-presentation-1280x720")
 
 
+def test_the_presentation_bar_and_advanced_inputs_appear_when_first_asked_for(watched_page, dashboard_server):
+    """Both are made after the page loads (issue 22: page build <= 0.3 s); made late, they work."""
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?preset=nominal")
+    assert page.locator(".amra-present-run").count() == 0 and page.locator(".amra-advanced input").count() == 0
+    page.locator(".amra-present button").click()
+    gj = page.locator(".amra-present-gj input")
+    expect(gj).to_be_visible(timeout=30_000)
+    expect(gj).to_have_value("1500")
+    page.locator(".amra-present button").click()  # back: the bar steps aside, the sidebar's input stays
+    expect(gj).to_be_hidden()
+    page.locator(".amra-advanced .card-header").click()
+    airspeed = page.locator(".amra-advanced input").first
+    expect(airspeed).to_be_visible(timeout=30_000)
+    airspeed.fill("12")
+    airspeed.press("Enter")
+    wait_for(lambda: _session(dashboard_server).controls.airspeed_m_s == 12.0, 30,
+             what="the late-made airspeed input to set the control")
+
+
 def test_the_rotor_drawing_moves_with_the_run(watched_page, dashboard_server):
     page = watched_page
     open_dashboard(page, dashboard_server[0] + "?preset=nominal&run_s=20&speed=1")
