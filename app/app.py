@@ -143,7 +143,7 @@ class Dashboard(pn.viewable.Viewer):
         self.status.reset()
         self._clear_messages()  # each run starts with a clean message area
         self.status.case = case_label(self.controls, scenario)
-        self.status.run.object = run_html("starting ...")
+        self.status.run.value = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
         self._run_preset = self.controls.preset
         self.exports.rename({"history": exports.names_for(self.controls)["history"]})
@@ -154,7 +154,7 @@ class Dashboard(pn.viewable.Viewer):
         ref = PRESETS[self._run_preset].teeter_reference_rad
         if ref is not None and len(ev.history):
             beta = teeter_amplitude_rad(ev.history)
-            self.status.note.object = (f"Teeter amplitude (1/rev, last revolution): this model {beta:.3f} rad; "
+            self.status.note.value = (f"Teeter amplitude (1/rev, last revolution): this model {beta:.3f} rad; "
                                        f"measured in flight {ref[0]:.3f} rad; original AMRA {ref[1]:.3f} rad")
 
     def reset(self, *_) -> None:
@@ -211,12 +211,12 @@ class Dashboard(pn.viewable.Viewer):
         if self.session.running:
             self.session.set_live(**self.controls.live_values())
             c = self.controls
-            self.status.note.object = (f"applied live at the next chunk: GJ {c.gj_nm2:.4g} N m²/rad, "
+            self.status.note.value = (f"applied live at the next chunk: GJ {c.gj_nm2:.4g} N m²/rad, "
                                        f"EA {c.ea_pct:g} %, CG {c.cg_pct:g} %")
 
     def _on_case(self, *events) -> None:
         if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):
-            self.status.note.object = "this change takes effect at the next run (only GJ, EA and CG apply live)"
+            self.status.note.value = "this change takes effect at the next run (only GJ, EA and CG apply live)"
         self.refresh.kick()
 
     def _sensitivity_case(self):

@@ -181,7 +181,7 @@ class MapView(pn.viewable.Viewer):
                 f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}{eta}")
         if snap.get("notice"):  # the store could not be used or written (app.server.map_jobs.open_store)
             line += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
-        self.status.object = line
+        self.status.value = line
         self.draw_boundaries(self.registry.related(spec))
 
     def draw_boundaries(self, related: dict) -> None:

@@ -86,7 +86,7 @@ class SensitivityView(pn.viewable.Viewer):
             self.notify(f"cannot study the sensitivity of this case: {exc}")
             return
         self.busy.visible = self.busy.active = True
-        self.info.object = (f"computing: 17 walks of the CG {100 * cg:.1f} % column ({html.escape(settings.fidelity)}), "
+        self.info.value = (f"computing: 17 walks of the CG {100 * cg:.1f} % column ({html.escape(settings.fidelity)}), "
                             f"started {time.strftime('%H:%M:%S')}; the map's own walk takes a few seconds per column "
                             "for rigid and up to a minute for the FEM fidelities ...")
         self.submit("sensitivity", Sensitivity, compute.sensitivity_study, rotor, flight, settings, cg,
@@ -96,7 +96,7 @@ class SensitivityView(pn.viewable.Viewer):
         self.result = result
         self.busy.visible = self.busy.active = False
         self.table.object = display_frame(result)
-        self.info.object = summary_html(result)
+        self.info.value = summary_html(result)
         self.download.disabled = False
         self.download.filename = f"amra-sensitivity-{result['fidelity']}-cg{100 * result['cg']:.0f}.csv"
         self.on_bands(result)

@@ -61,10 +61,15 @@ def run_html(text: str) -> str:
     return f"<b>Run:</b> {html.escape(text)}"
 
 
-def text(html_text: str = "", css_class: str = "", **kw) -> pn.pane.HTML:
-    """A line of HTML that changes in place (a same-text set sends nothing)."""
+def text(html_text: str = "", css_class: str = "", **kw) -> pn.widgets.StaticText:
+    """A line of HTML that changes in place: set its ``value`` (a same-text set sends nothing).
+
+    A ``StaticText``, not an HTML pane: in a template, an HTML pane's first update also rewrites its
+    stylesheets, and Bokeh then walks the whole document's models (about 500) and sends three
+    stylesheet models; a widget's update sends only its text. Under 16 sessions that walk was 18 %
+    of the server's event loop (docs/upstream/panel-template-pane-first-update-stylesheets.md)."""
     kw.setdefault("sizing_mode", "stretch_width")
-    return pn.pane.HTML(html_text, css_classes=[css_class] if css_class else [], **kw)
+    return pn.widgets.StaticText(value=html_text, css_classes=[css_class] if css_class else [], **kw)
 
 
 class StatusView(pn.viewable.Viewer):
@@ -79,7 +84,7 @@ class StatusView(pn.viewable.Viewer):
         self.verdict = None
         self.notify = notify
         self.case = ""  #: the case of the run the card speaks of (set when a run starts)
-        session.subscribe(RunStatus, lambda ev: setattr(self.run, "object", run_html(ev.text)))
+        session.subscribe(RunStatus, lambda ev: setattr(self.run, "value", run_html(ev.text)))
         session.subscribe(Started, self._started)
         session.subscribe(VerdictNews, lambda ev: self.show(ev.verdict, ev.final, ev.status, ev.start_note))
         session.subscribe(Applied, self._applied)
@@ -91,19 +96,19 @@ class StatusView(pn.viewable.Viewer):
 
     def _applied(self, ev: Applied) -> None:
         how = "softened as scripted" if ev.values.get("scripted") else "applied live"
-        self.note.object = f"{how} at t = {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
+        self.note.value = f"{how} at t = {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict
-        self.card.object = verdict_html(verdict, final, status, start_note, self.case)
-        self.badge.object = badge_html(verdict, final)
+        self.card.value = verdict_html(verdict, final, status, start_note, self.case)
+        self.badge.value = badge_html(verdict, final)
         if final and status == "numerical-failure":
             self.notify(f"the run failed numerically: {verdict.explanation}")
 
     def reset(self) -> None:
         self.show(None, False)
-        self.run.object = run_html("idle")
-        self.note.object = ""
+        self.run.value = run_html("idle")
+        self.note.value = ""
 
     def __panel__(self):
         return pn.Column(self.card, self.run, self.note, width=380)

@@ -26,8 +26,8 @@ def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     # a 1 s run is too short to call stable (issue 21 §7): its final verdict says so
     v = dash.status.verdict
     assert v.verdict == "undetermined" and "run too short" in v.explanation, v
-    assert "data-final='true'" in dash.status.card.object
-    assert "finished" in dash.status.run.object
+    assert "data-final='true'" in dash.status.card.value
+    assert "finished" in dash.status.run.value
     csv = dash.history_csv().getvalue().splitlines()
     meta = [ln for ln in csv if ln.startswith("# ")]
     assert meta[0].startswith("# AMRA ") and "# fidelity: rigid" in meta and "# verdict: undetermined" in meta
@@ -46,7 +46,7 @@ def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     data = dash.live.frame()
     first_new = data[data["gj_nm2"] == 700.0]["t_s"].iloc[0]
     assert first_new > t_change and np.all(np.diff(data["t_s"]) > 0)  # the same run, continuing
-    assert "applied live" in dash.status.note.object
+    assert "applied live" in dash.status.note.value
     # the server's share of the slider latency is measured (change received -> first rows sent)
     assert len(dash.session.live_latencies_s) == 1 and 0.0 < dash.session.live_latencies_s[0] < 30.0
     dash.controls.param.trigger("stop")
@@ -82,9 +82,9 @@ def test_fig10_preset_tells_the_papers_story(dash, wait):
     v = dash.status.verdict
     assert v.verdict in ("flutter", "divergence", "no-autorotation") and 2.0 < v.collapse_time_s < 8.0, v
     assert v.outcome == "rotor-speed-collapse", v  # no autorotation at GJ 100: the rotor speed is lost
-    assert "softened as scripted at t = 2.0" in dash.status.note.object and "GJ 100 N m²/rad" in dash.status.note.object
+    assert "softened as scripted at t = 2.0" in dash.status.note.value and "GJ 100 N m²/rad" in dash.status.note.value
     assert (dash.live.frame()["gj_nm2"] == 100.0).any() and (dash.live.frame()["gj_nm2"] == 1500.0).any()
-    card = dash.status.card.object  # the card names the case it belongs to
+    card = dash.status.card.value  # the card names the case it belongs to
     assert "Fig. 10: rigid, axial, GJ 100" in card and "GJ 1500 → 100 N m²/rad at 2 s" in card
     marks = dash.live.markers.data  # a vertical marker with the new value in every live plot
     assert list(marks["text"]) == ["GJ 100"] and abs(marks["t_s"][0] - 2.0) < 0.01
@@ -95,7 +95,7 @@ def test_table1_shows_the_teeter_beside_the_flight_measurement(dash, wait):
     dash.controls.param.update(run_s=1.0, speed=50.0)
     dash.start_run()
     pump_until(dash, lambda: dash.last_history is not None, wait, 180, what="the Table 1 run")
-    note = dash.status.note.object
+    note = dash.status.note.value
     assert "measured in flight 0.031 rad; original AMRA 0.026 rad" in note
     beta = float(note.split("this model ")[1].split(" rad")[0])
     assert 0.0 < beta < 0.2
@@ -135,7 +135,7 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     assert dash.map.ea_source.data["x"] == [32.0]  # the EA drawn where it is
     pump_until(dash, lambda: dash.map.job.state == "done" and dash.map.cells, wait, 180, what="the map")
     dash.map.poll()
-    assert dash.map.progress.value == 100 and "complete" in dash.map.status.object
+    assert dash.map.progress.value == 100 and "complete" in dash.map.status.value
     cell = dash.map.cells[3]
     dash.load_cell(cell)  # values rounded to the grid's resolution
     assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == float(f"{cell.gj_nm2:.3g}")
@@ -299,3 +299,26 @@ def test_the_advanced_card_makes_its_inputs_when_first_opened(dash):
     assert dash.controls.airspeed_m_s == 15.0
     card.collapsed, card.collapsed = True, False  # closed and opened again: the same four inputs
     assert len(card) == 4
+
+
+def test_a_status_line_update_sends_only_its_text(dash):
+    """The run status, the verdict card and the map's status line change all through a run: each
+    change sends its text alone. (An HTML pane in a template rewrites its stylesheets at its first
+    update, and Bokeh then walks the whole document: docs/upstream/panel-template-pane-first-update-stylesheets.md.)"""
+    import holoviews as hv
+    from bokeh.document import Document
+    from panel.io.state import set_curdoc
+    from app.views.status import run_html
+    hv.extension("bokeh", logo=False)
+    doc = Document()
+    with set_curdoc(doc):
+        dash.__panel__().server_doc(doc)
+        the_map = dash.map.__panel__()
+        doc.add_root(the_map.get_root(doc))
+    changed = []
+    doc.on_change(lambda e: changed.append(getattr(e, "attr", type(e).__name__)))
+    with set_curdoc(doc):
+        dash.status.run.value = run_html("running, t = 1.00 s")
+        dash.status.card.value = "<div class='amra-verdict' data-verdict='stable'>stable</div>"
+        dash.map.status.value = "<b>Map</b>: computing"
+    assert len(changed) >= 3 and set(changed) == {"text"}, changed  # (a widget shown twice sends twice)

@@ -16,7 +16,7 @@ from test_dashboard import pump_until
 def test_sensitivity_study_draws_bands_and_exports_its_table(dash, wait):
     dash.refresh_analyses()  # the map follows the case
     dash.sensitivity.start()
-    assert dash.sensitivity.busy.visible and "computing" in dash.sensitivity.info.object
+    assert dash.sensitivity.busy.visible and "computing" in dash.sensitivity.info.value
     pump_until(dash, lambda: dash.sensitivity.result is not None, wait, 900, "the sensitivity study")
     r = dash.sensitivity.result
     assert r["cg"] == pytest.approx(0.40) and r["fidelity"] == "rigid" and r["step"] == pytest.approx(0.10)
@@ -33,7 +33,7 @@ def test_sensitivity_study_draws_bands_and_exports_its_table(dash, wait):
     assert list(shown.columns) == list(HEADERS)
     assert not shown.isin(["None", "nan", "NaN"]).any().any()  # a missing value is said, not printed as None
     assert (shown["Fold GJ [N m²/rad]"] == [f"{w:.0f}" for w in (row["fold_gj_nm2"] for row in r["rows"])]).all()
-    assert f"fold GJ {base:.0f}" in dash.sensitivity.info.object
+    assert f"fold GJ {base:.0f}" in dash.sensitivity.info.value
     back = pd.read_csv(io.StringIO(dash.sensitivity.csv().getvalue()), comment="#")
     assert list(back.columns) == list(TABLE_COLUMNS) and len(back) == len(r["rows"])
     want = [row["fold_gj_nm2"] for row in r["rows"]]
