@@ -64,12 +64,15 @@ class RotorDrawing:
         self.sections = [ColumnDataSource({"x": [], "y": []}) for _ in range(2)]
         self._look = (radius_m, title, scales)
         self._figures = None
+        self._pose = None  #: the arguments of the last :meth:`draw`
 
     @property
     def figures(self) -> tuple:
         """The side view and the tip sections, built when first shown."""
         if self._figures is None:
             self._figures = self._build()
+            if self._pose is not None:  # the last pose asked for while nothing showed it
+                self._draw(*self._pose)
         return self._figures
 
     def _build(self) -> tuple:
@@ -100,7 +103,13 @@ class RotorDrawing:
     def draw(self, r_m, flap_m, twist_rad, teeter_rad: float, chord_m: float | None = None,
              x_ea: float | None = None, radius_m: float | None = None) -> None:
         """One pose; the tip section's chord [m] and elastic axis [chord fraction] and the radius [m]
-        are the drawn rotor's (the run's or the mode's), when given."""
+        are the drawn rotor's (the run's or the mode's), when given. Until the figures are shown, only
+        the pose is kept (a run posts ten a second; nobody sees them in a tab never opened)."""
+        self._pose = (r_m, flap_m, twist_rad, teeter_rad, chord_m, x_ea, radius_m)
+        if self._figures is not None:
+            self._draw(*self._pose)
+
+    def _draw(self, r_m, flap_m, twist_rad, teeter_rad, chord_m, x_ea, radius_m) -> None:
         if chord_m is not None and x_ea is not None:
             self.chord_m, self.x_ea = float(chord_m), float(x_ea)
         self._fit(radius_m)

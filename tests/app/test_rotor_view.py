@@ -88,6 +88,8 @@ def test_the_live_rotor_follows_the_run_and_a_picked_mode_plays(dash, wait):
     from amra_core.pose import rotor_pose
     sim = dash.session.sim
     final = rotor_pose(sim.model, sim.y)
+    assert not len(view.drawing.blades[0].data["x"])  # the tab was never shown: nothing drawn yet
+    view.__panel__()  # shown: the last pose is drawn
     for b in (0, 1):
         r = np.abs(np.asarray(view.drawing.blades[b].data["x"])[1:])
         w = np.asarray(view.drawing.blades[b].data["y"])[1:] / FLAP_SCALE
@@ -102,7 +104,9 @@ def test_the_live_rotor_follows_the_run_and_a_picked_mode_plays(dash, wait):
     dash.modes.pick.value = choice
     pump_until(dash, lambda: dash.modes.animation.frames is not None, wait, what="the mode's frames")
     anim = dash.modes.animation
+    anim.__panel__()  # its tab shown: the frames are drawn
     first = np.array(anim.drawing.blades[0].data["y"])
+    assert len(first)
     anim.player.value = compute.MODE_FRAMES // 4  # a quarter cycle on, the blade has moved
     assert not np.allclose(np.array(anim.drawing.blades[0].data["y"]), first)
     assert anim.player.visible and "flap" in anim.info.object
