@@ -3,14 +3,16 @@ with the accuracy of that speed beside it, the interpreted (``NUMBA_DISABLE_JIT=
 short run, the same-run ratio against ``scipy.integrate.solve_ivp`` on the same right-hand side, and
 the time from a fresh process (warm on-disk cache) to the first step.
 
-Accuracy: each fidelity's run at its default step is compared with a reference run at a step 8
-times smaller, from the same trim and kick, recording at the same instants: the difference at
-t = 5 s (asked for; by then the kick has decayed, so it is tiny) and the largest difference over
-the 5 s, which falls in the first 50 ms, while the kick's fast modes ring. Bounds: the largest tip
-twist error at most 2 % of the largest tip-twist excursion of the reference run, and a relative
-rotor-speed error of at most 1e-4. The default steps measured 0.3 / 1.0 / 0.9 % (rigid /
-fem-torsion / fem-coupled, 2026-12-02; the error falls as dt^3.3-dt^4, as RK4's should): the bound
-lets a faster setting at most double today's error, and a setting that loses more fails loudly."""
+Accuracy: each fidelity's run at its default step is compared with a reference run of plain RK4
+at a step 8 times smaller, from the same trim and kick, recording at the same instants: the
+difference at t = 5 s (asked for; by then the kick has decayed, so it is tiny) and the largest
+difference over the 5 s, which falls in the first 50 ms, while the kick's fast modes ring. Bounds:
+the largest tip twist error at most 2 % of the largest tip-twist excursion of the reference run,
+and a relative rotor-speed error of at most 1e-4. The default steps measured 0.3 / 1.0 / 0.9 %
+(rigid / fem-torsion / fem-coupled, plain RK4, 2026-12-02; the error falls as dt^3.3-dt^4, as
+RK4's should): the bound lets a faster setting at most double that error, and a setting that
+loses more fails loudly. The FEM levels' Lawson step (2026-12-05) is checked against the same
+bounds, also at mu 0.1 (``tests/core/test_lawson.py``)."""
 from __future__ import annotations
 
 import json
@@ -65,25 +67,30 @@ def _speed(fidelity: str, sim_seconds: float) -> dict:
             "target_x_realtime": TARGETS_X_REALTIME[fidelity], "meets_target": ratio >= TARGETS_X_REALTIME[fidelity]}
 
 
-def _accuracy(fidelity: str, step_factor: float = 1.0) -> dict:
+def _accuracy(fidelity: str, step_factor: float = 1.0, flight=None, span_s: float = ACCURACY_SPAN_S,
+              integrator: str = "lawson") -> dict:
     """Tip twist and rotor speed of the default step (times ``step_factor``, for convergence
-    studies) against a run at 1/8 of it (module docstring)."""
+    studies) against a run of plain RK4 at 1/8 of it (module docstring), in axial flight or
+    ``flight``."""
     import numpy as np
     from .flight import FlightCondition, SolverSettings
     from .rotor_io import load_preset
     from .simulation import COL, Case, Simulation
     rotor = load_preset("mccutcheon")
+    flight = flight or FlightCondition()
     runs = {}
-    base = Simulation(Case(rotor, FlightCondition(), SolverSettings(fidelity, n_elements=10)))
+    base = Simulation(Case(rotor, flight, SolverSettings(fidelity, n_elements=10, integrator=integrator)))
     for k in (1, REFERENCE_STEP_DIVISOR):
-        settings = SolverSettings(fidelity, n_elements=10, dt_s=base.dt * step_factor / k)
-        sim = Simulation(Case(rotor, FlightCondition(), settings), trim_result=base.trim)
+        # the reference is plain RK4 (the default step of the FEM levels is Lawson's: model.py)
+        settings = SolverSettings(fidelity, n_elements=10, dt_s=base.dt * step_factor / k,
+                                  integrator=integrator if k == 1 else "rk4")
+        sim = Simulation(Case(rotor, flight, settings), trim_result=base.trim)
         # record at the same instants as the default run (every k-th fine step), so the rows compare
         # directly: interpolating between different sampling times would itself err more than the
         # integration does (the kick excites modes up to ~170 Hz, sampled every 2.5-3 ms)
         sim.record_every = k * max(1, round(base.record_every / step_factor))
         sim.record_interval_s = sim.dt * sim.record_every
-        sim.run(t_end_s=ACCURACY_SPAN_S)
+        sim.run(t_end_s=span_s)
         runs[k] = (sim.history, sim.dt)
     (h, dt), (ref, dt_ref) = runs[1], runs[REFERENCE_STEP_DIVISOR]
     n = min(len(h), len(ref))

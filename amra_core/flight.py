@@ -11,6 +11,7 @@ from .shapes import FIDELITIES, TORSION_SPRINGS
 
 AERO_MODELS = ("quasi-steady", "theodorsen")
 INFLOW_MODELS = ("uniform", "three-state")
+INTEGRATORS = ("lawson", "rk4")
 
 
 class SettingsError(ValueError):
@@ -81,7 +82,10 @@ class SolverSettings:
     ``rigid_spring``: the ``rigid`` level's root torsion spring, ``frequency`` (``(pi/2)^2 GJ/L``,
     the first torsion frequency of the uniform cantilever; default) | ``static`` (the same
     load-weighted static twist under an ``r^2`` moment, about 1.6 x softer), see
-    :mod:`amra_core.rigid_equivalence`; the FEM levels ignore it.
+    :mod:`amra_core.rigid_equivalence`; the FEM levels ignore it;
+    ``integrator``: ``lawson`` (default: the FEM levels' modal oscillators integrated exactly, RK4
+    for the rest, so the step follows the physics, not the stiffest retained mode; see
+    :func:`amra_core.kernels.advance`) | ``rk4`` (plain RK4). The rigid level always uses RK4.
     """
 
     fidelity: str = "rigid"
@@ -92,6 +96,7 @@ class SolverSettings:
     dt_s: Optional[float] = None
     max_mode_hz: Optional[float] = 200.0
     rigid_spring: str = "frequency"
+    integrator: str = "lawson"
 
     def __post_init__(self):
         if self.fidelity not in FIDELITIES:
@@ -103,6 +108,8 @@ class SolverSettings:
         if self.rigid_spring not in TORSION_SPRINGS:
             raise SettingsError(f"rigid_spring = {self.rigid_spring!r} is not allowed: choose one of "
                                 f"{', '.join(TORSION_SPRINGS)}")
+        if self.integrator not in INTEGRATORS:
+            raise SettingsError(f"integrator = {self.integrator!r} is not allowed: choose one of {', '.join(INTEGRATORS)}")
         _integer(self, "n_elements", "elements", 1, 60)
         _integer(self, "n_stations", "stations", 4, 60)
         if self.dt_s is not None:

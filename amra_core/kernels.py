@@ -21,7 +21,7 @@ from .jit import exact_kernel, inline_kernel, kernel
 from .sincos_kernel import sincos
 from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
-                    P_UNIT_MASS,
+                    P_LAWSON, P_UNIT_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
                     P_VH, S_A, S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, STATION_STRIDE, SV_A, SV_C, SV_R, SV_SIGN,
                     SV_THETA0, SV_W, SV_XAC, SV_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0,
@@ -29,7 +29,7 @@ from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LO
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "ed7c0197110f6a8d"
+CACHE_STAMP = "10a16ff60ee721f9"
 
 A1, A2 = WAGNER_A
 B1, B2 = WAGNER_B
@@ -520,16 +520,76 @@ def record_row(t, y, m, loads, row):
     row[12] = y[Y_ZETA0]; row[13] = y[Y_ZETA0 + 1]; row[14] = loads[L_FVERT]; row[15] = loads[L_FHORIZ]
 
 
+#: the oscillators' frequencies follow the rotor speed: new tables when it moved by this fraction
+OSCILLATOR_OMEGA_TOL = 1e-3
+
+
+@inline_kernel
+def oscillator_tables(m, om, dt, w2, cr, sw, ws):
+    """The half-step flow of ``x_i'' = -w_i^2 x_i``, ``w_i^2 = k0_ii + om^2 k2_ii`` (>= 0)."""
+    for i in range(w2.shape[0]):
+        w2[i] = max(m.k0[i, i] + om * om * m.k2[i, i], 0.0)
+        w = math.sqrt(w2[i])
+        if w * dt > 1e-12:
+            cr[i] = math.cos(0.5 * dt * w); sw[i] = math.sin(0.5 * dt * w) / w; ws[i] = w * math.sin(0.5 * dt * w)
+        else:
+            cr[i] = 1.0; sw[i] = 0.5 * dt; ws[i] = 0.0
+
+
+@inline_kernel
+def rotate_modes(v, x0, xd0, ns, cr, sw, ws):
+    """``v``'s modal pairs (x_i, x_i') advanced by the exact flow of ``x_i'' = -w_i^2 x_i`` over the
+    step the tables were made for: ``cr = cos(w h)``, ``sw = sin(w h) / w``, ``ws = w sin(w h)``."""
+    for i in range(ns):
+        a = v[x0 + i]; b = v[xd0 + i]
+        v[x0 + i] = cr[i] * a + sw[i] * b
+        v[xd0 + i] = cr[i] * b - ws[i] * a
+
+
+@inline_kernel
+def without_oscillators(z, k, x0, xd0, ns, w2):
+    """``k = f(y)`` becomes ``f(y) - L z`` (``z = y - xbar``): the part of the right-hand side the
+    oscillators leave."""
+    for i in range(ns):
+        k[x0 + i] = 0.0  # f's x rows are x' exactly: all of them is L z
+        k[xd0 + i] += w2[i] * z[x0 + i]
+
+
+@inline_kernel
+def stage_rhs(zt, k, m, loads, work, cw, x0, xd0, ns, w2, xbar):
+    """``k = f(zt + xbar) - L zt``, ``zt`` left as it was."""
+    for i in range(ns):
+        zt[x0 + i] += xbar[i]
+    rhs(zt, k, m, loads, work, cw)
+    for i in range(ns):
+        zt[x0 + i] -= xbar[i]
+    without_oscillators(zt, k, x0, xd0, ns, w2)
+
+
 @kernel
 def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     """RK4 for ``n_steps`` from time ``t0``; every ``record_every`` steps a history row and the full
     state are written. Returns (steps done, rows written, status): status 0 ok, 1 non-finite state
     or a numerically impossible jump of the rotor speed in one step,
-    2 rotor speed below ``omega_floor``. ``y`` is advanced in place."""
+    2 rotor speed below ``omega_floor``. ``y`` is advanced in place.
+
+    With ``p[P_LAWSON] > 0`` (a mass-normalised modal basis) the step is Lawson's
+    integrating-factor RK4 (Hochbruck & Ostermann, Acta Numerica 2010, sec. 2.6): the modal
+    oscillators ``L: x_i'' = -w_i^2 x_i``, ``w_i^2 = k0_ii + Omega^2 k2_ii`` (the diagonal of the
+    stiffness at the rotor speed, followed to :data:`OSCILLATOR_OMEGA_TOL`), are integrated exactly
+    about their static deflection under the step's other forces (so a fixed point of ``f`` stays
+    one), and RK4 integrates the rest in their frame: the explicit step no longer follows the
+    stiffest retained mode. The method is fourth order for any ``w_i``; what RK4 must resolve is
+    the rest (the stiffness off the diagonal, inertial coupling, aerodynamics)."""
     n = y.shape[0]
     ns = int(m.p[P_NS])
-    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); yt = np.empty(n)
+    x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns
+    k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); yt = np.empty(n); u = np.empty(n)
     loads = np.zeros(8); work, cw = new_work(m)
+    lawson = m.p[P_LAWSON] > 0.5
+    w2 = np.zeros(ns); xbar = np.zeros(ns); cr = np.ones(ns); sw = np.full(ns, 0.5 * dt); ws = np.zeros(ns)
+    om_l = -1.0  #: the rotor speed the oscillator tables are for (none yet)
+    h = dt
     rows = 0
     status = 0
     done = 0
@@ -540,21 +600,61 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
             for i in range(n):
                 states[rows, i] = y[i]
             rows += 1
-        for i in range(n):
-            yt[i] = y[i] + 0.5 * dt * k1[i]
-        rhs(yt, k2, m, loads, work, cw)
-        for i in range(n):
-            yt[i] = y[i] + 0.5 * dt * k2[i]
-        rhs(yt, k3, m, loads, work, cw)
-        for i in range(n):
-            yt[i] = y[i] + dt * k3[i]
-        rhs(yt, k4, m, loads, work, cw)
-        finite = True
         om_old = y[Y_OMEGA]
-        for i in range(n):
-            y[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-            if not math.isfinite(y[i]):
-                finite = False
+        finite = True
+        if lawson:
+            if abs(y[Y_OMEGA] - om_l) > OSCILLATOR_OMEGA_TOL * (abs(om_l) + 1.0):
+                om_l = y[Y_OMEGA]
+                oscillator_tables(m, om_l, dt, w2, cr, sw, ws)
+            # about the modes' static deflection xbar under this step's other forces (so a fixed
+            # point of f stays one): z = y - xbar, E = exp(hL), E2 = exp(hL/2), N = f - L z:
+            # Z2 = E2 (z + h/2 k1), Z3 = E2 z + h/2 k2, Z4 = E2 (E2 z + h k3),
+            # z+ = E2 (E2 (z + h/6 k1) + h/3 (k2 + k3)) + h/6 k4 (= E z + h/6 (E k1 + 2 E2 (k2 + k3) + k4))
+            for i in range(ns):
+                xbar[i] = (k1[xd0 + i] + w2[i] * y[x0 + i]) / w2[i] if w2[i] > 0.0 else 0.0
+                y[x0 + i] -= xbar[i]
+            without_oscillators(y, k1, x0, xd0, ns, w2)
+            for i in range(n):
+                yt[i] = y[i] + 0.5 * h * k1[i]
+            rotate_modes(yt, x0, xd0, ns, cr, sw, ws)
+            stage_rhs(yt, k2, m, loads, work, cw, x0, xd0, ns, w2, xbar)
+            for i in range(n):
+                u[i] = y[i]
+            rotate_modes(u, x0, xd0, ns, cr, sw, ws)
+            for i in range(n):
+                yt[i] = u[i] + 0.5 * h * k2[i]
+            stage_rhs(yt, k3, m, loads, work, cw, x0, xd0, ns, w2, xbar)
+            for i in range(n):
+                yt[i] = u[i] + h * k3[i]
+            rotate_modes(yt, x0, xd0, ns, cr, sw, ws)
+            stage_rhs(yt, k4, m, loads, work, cw, x0, xd0, ns, w2, xbar)
+            for i in range(n):
+                y[i] += h / 6.0 * k1[i]
+            rotate_modes(y, x0, xd0, ns, cr, sw, ws)
+            for i in range(n):
+                y[i] += h / 3.0 * (k2[i] + k3[i])
+            rotate_modes(y, x0, xd0, ns, cr, sw, ws)
+            for i in range(n):
+                y[i] += h / 6.0 * k4[i]
+            for i in range(ns):
+                y[x0 + i] += xbar[i]
+            for i in range(n):
+                if not math.isfinite(y[i]):
+                    finite = False
+        else:
+            for i in range(n):
+                yt[i] = y[i] + 0.5 * dt * k1[i]
+            rhs(yt, k2, m, loads, work, cw)
+            for i in range(n):
+                yt[i] = y[i] + 0.5 * dt * k2[i]
+            rhs(yt, k3, m, loads, work, cw)
+            for i in range(n):
+                yt[i] = y[i] + dt * k3[i]
+            rhs(yt, k4, m, loads, work, cw)
+            for i in range(n):
+                y[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+                if not math.isfinite(y[i]):
+                    finite = False
         done = s + 1
         # a quarter of the rotor speed in one step is beyond any physical torque (the rotor's
         # inertia allows ~0.1 % per step): the explicit step has left its stability region

@@ -22,7 +22,10 @@ P_NQ, P_NST, P_NS, P_QUASI_STATIC, P_CLAG, P_INFLOW3 = range(16, 22)
 P_VACUUM = 22  #: 1: no aerodynamic loads, inflow and descent frozen (conservation tests only)
 P_FLAG = 23  #: static lag moment per Omega^2 [kg m] (RotorStructure.f_lag)
 P_UNIT_MASS = 24  #: 1: minv is the identity (a mass-normalised modal basis), so ugyh = gyh, uglh = glh
-N_P = 25
+#: 1: :func:`amra_core.kernels.advance` integrates the modal oscillators
+#: ``x_i'' = -(k0_ii + Omega^2 k2_ii) x_i`` exactly (Lawson's integrating-factor RK4); 0: plain RK4
+P_LAWSON = 25
+N_P = 26
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)
