@@ -520,8 +520,9 @@ def record_row(t, y, m, loads, row):
     row[12] = y[Y_ZETA0]; row[13] = y[Y_ZETA0 + 1]; row[14] = loads[L_FVERT]; row[15] = loads[L_FHORIZ]
 
 
-#: the oscillators' frequencies follow the rotor speed: new tables when it moved by this fraction
-OSCILLATOR_OMEGA_TOL = 1e-3
+#: the oscillators' frequencies follow the rotor speed, rounded to this bin [rad/s]: a function of
+#: the state alone, so a run in chunks takes the steps of one long run, bit for bit
+OSCILLATOR_OMEGA_BIN = 0.02
 
 
 @inline_kernel
@@ -576,7 +577,7 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     With ``p[P_LAWSON] > 0`` (a mass-normalised modal basis) the step is Lawson's
     integrating-factor RK4 (Hochbruck & Ostermann, Acta Numerica 2010, sec. 2.6): the modal
     oscillators ``L: x_i'' = -w_i^2 x_i``, ``w_i^2 = k0_ii + Omega^2 k2_ii`` (the diagonal of the
-    stiffness at the rotor speed, followed to :data:`OSCILLATOR_OMEGA_TOL`), are integrated exactly
+    stiffness at the rotor speed, in bins of :data:`OSCILLATOR_OMEGA_BIN`), are integrated exactly
     about their static deflection under the step's other forces (so a fixed point of ``f`` stays
     one), and RK4 integrates the rest in their frame: the explicit step no longer follows the
     stiffest retained mode. The method is fourth order for any ``w_i``; what RK4 must resolve is
@@ -588,7 +589,7 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     loads = np.zeros(8); work, cw = new_work(m)
     lawson = m.p[P_LAWSON] > 0.5
     w2 = np.zeros(ns); xbar = np.zeros(ns); cr = np.ones(ns); sw = np.full(ns, 0.5 * dt); ws = np.zeros(ns)
-    om_l = -1.0  #: the rotor speed the oscillator tables are for (none yet)
+    om_l = math.nan  #: the rotor speed the oscillator tables are for (none yet)
     h = dt
     rows = 0
     status = 0
@@ -603,8 +604,9 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
         om_old = y[Y_OMEGA]
         finite = True
         if lawson:
-            if abs(y[Y_OMEGA] - om_l) > OSCILLATOR_OMEGA_TOL * (abs(om_l) + 1.0):
-                om_l = y[Y_OMEGA]
+            om_bin = OSCILLATOR_OMEGA_BIN * round(y[Y_OMEGA] / OSCILLATOR_OMEGA_BIN)
+            if om_bin != om_l:
+                om_l = om_bin
                 oscillator_tables(m, om_l, dt, w2, cr, sw, ws)
             # about the modes' static deflection xbar under this step's other forces (so a fixed
             # point of f stays one): z = y - xbar, E = exp(hL), E2 = exp(hL/2), N = f - L z:

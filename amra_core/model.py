@@ -388,5 +388,6 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     c_min = float(a.st[:, S_C].min())
     v_tip = omega_rad_s * model.rotor.radius_m + model.flight.airspeed_m_s + 30.0
     lam_aero = 2.0 * v_tip / c_min * WAGNER_B[1] if model.settings.aero == "theodorsen" else 0.0
-    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and not model.flight.is_axial else 0.003
+    forward = a.p[P_VH] > 0.0 or not model.flight.is_axial
+    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and forward else 0.003
     return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
