@@ -11,8 +11,8 @@ the largest tip twist error at most 2 % of the largest tip-twist excursion of th
 and a relative rotor-speed error of at most 1e-4. The default steps measured 0.3 / 1.0 / 0.9 %
 (rigid / fem-torsion / fem-coupled, plain RK4, 2026-12-02; the error falls as dt^3.3-dt^4, as
 RK4's should): the bound lets a faster setting at most double that error, and a setting that
-loses more fails loudly. The FEM levels' Lawson step in axial flight (2026-12-05) is checked against
-the same bounds (``tests/core/test_lawson.py``)."""
+loses more fails loudly. The FEM levels' Lawson step (2026-12-05) is checked against the same
+bounds, also at mu 0.1 (``tests/core/test_lawson.py``)."""
 from __future__ import annotations
 
 import json

@@ -308,6 +308,38 @@ STALL_FAR = 1e-2
 BACKTRACKS = 3
 
 
+#: statuses of a held-speed trim's second and third starts (:func:`trim_forward`)
+RETRIES = ("retry-bracket", "retry")
+#: shaft tilts [deg] at which a failed held-speed trim looks for the vertical force crossing the weight
+BRACKET_TILTS_DEG = (-10.0, -5.0, 0.0, 5.0, 10.0, 15.0, 20.0)
+
+
+def _tilt_bracket(model: CompiledModel, y0: np.ndarray, omega: float, airspeed_m_s, mu, dt: float):
+    """The shaft tilt [rad] where the vertical force, marched 12 revolutions from ``y0`` at each
+    tilt of :data:`BRACKET_TILTS_DEG`, first rises through the weight (linear between the two
+    tilts), or None. A held-speed trim's Newton iteration from its cold start (8 deg) can wander to
+    the tilt bound where the marched force is not yet periodic (paper Table 1 case B,
+    fem-coupled); from this bracket it starts next to the trim."""
+    H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
+    weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
+    prev = None
+    for deg in BRACKET_TILTS_DEG:
+        tilt = math.radians(deg)
+        speed = airspeed_m_s if mu is None else mu * omega * model.rotor.radius_m / math.cos(tilt)
+        y = y0.copy(); y[Y_OMEGA] = omega; y[Y_VD] = 0.0
+        try:
+            _, avg, _ = _march_revs(model.with_controls(alpha_s_rad=tilt, airspeed_m_s=speed, hold_omega=True,
+                                                        hold_vd=True), y, 12, dt)
+        except FloatingPointError:
+            prev = None
+            continue
+        res = avg[H["vertical_force_n"]] / weight - 1.0
+        if prev is not None and prev[1] < 0.0 <= res:
+            return prev[0] + (tilt - prev[0]) * (-prev[1]) / (res - prev[1])
+        prev = (tilt, res)
+    return None
+
+
 def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold: Optional[float] = None,
                  guess: Optional[TrimResult] = None, mu: Optional[float] = None) -> TrimResult:
     """Periodic trim in forward flight at horizontal airspeed ``airspeed_m_s`` [m/s], or, with
@@ -317,7 +349,7 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
     H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
     weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
     base = trim_axial(model) if guess is None else guess
-    if not base.ok and base.status != "retry":
+    if not base.ok and base.status not in RETRIES:
         return base
     y = base.state.copy()
     omega = omega_hold or base.omega_rad_s
@@ -408,7 +440,14 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
     vals = dict(omega=omega, vd=vd, tilt=tilt); vals.update(dict(zip(free, z)))
     ok = np.max(np.abs(res)) < 1e-3 and 0.2 * omega_guess(model) < vals["omega"] < 4 * omega_guess(model)
     if not ok and omega_hold:
-        if guess is None or guess.status != "retry":
+        tried = guess.status if guess is not None else None
+        if tried not in RETRIES:  # again from the tilt where the marched vertical force crosses the weight
+            tilt0 = _tilt_bracket(model, base.state, omega_hold, airspeed_m_s, mu, dt)
+            if tilt0 is not None:
+                retry = TrimResult("retry-bracket", state=base.state, disk_tilt_rad=tilt0, omega_rad_s=omega_hold,
+                                   model=model)
+                return trim_forward(model, airspeed_m_s, omega_hold, retry, mu)
+        if tried != "retry":
             retry = TrimResult("retry", state=base.state, disk_tilt_rad=math.radians(20.0), omega_rad_s=omega_hold,
                                model=model)
             return trim_forward(model, airspeed_m_s, omega_hold, retry, mu)

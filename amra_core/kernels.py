@@ -29,7 +29,7 @@ from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LO
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "c1e35ecf17e592f6"
+CACHE_STAMP = "10a16ff60ee721f9"
 
 A1, A2 = WAGNER_A
 B1, B2 = WAGNER_B
@@ -574,7 +574,7 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     or a numerically impossible jump of the rotor speed in one step,
     2 rotor speed below ``omega_floor``. ``y`` is advanced in place.
 
-    With ``p[P_LAWSON]`` (a mass-normalised modal basis) and no airspeed the step is Lawson's
+    With ``p[P_LAWSON] > 0`` (a mass-normalised modal basis) the step is Lawson's
     integrating-factor RK4 (Hochbruck & Ostermann, Acta Numerica 2010, sec. 2.6): the modal
     oscillators ``L: x_i'' = -w_i^2 x_i``, ``w_i^2 = k0_ii + Omega^2 k2_ii`` (the diagonal of the
     stiffness at the rotor speed, in bins of :data:`OSCILLATOR_OMEGA_BIN`), are integrated exactly
@@ -587,7 +587,7 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns
     k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); yt = np.empty(n); u = np.empty(n)
     loads = np.zeros(8); work, cw = new_work(m)
-    lawson = m.p[P_LAWSON] > 0.5 and m.p[P_VH] == 0.0  # axial flight only (model.stable_time_step)
+    lawson = m.p[P_LAWSON] > 0.5
     w2 = np.zeros(ns); xbar = np.zeros(ns); cr = np.ones(ns); sw = np.full(ns, 0.5 * dt); ws = np.zeros(ns)
     om_l = math.nan  #: the rotor speed the oscillator tables are for (none yet)
     h = dt

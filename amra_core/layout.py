@@ -23,8 +23,7 @@ P_VACUUM = 22  #: 1: no aerodynamic loads, inflow and descent frozen (conservati
 P_FLAG = 23  #: static lag moment per Omega^2 [kg m] (RotorStructure.f_lag)
 P_UNIT_MASS = 24  #: 1: minv is the identity (a mass-normalised modal basis), so ugyh = gyh, uglh = glh
 #: 1: :func:`amra_core.kernels.advance` integrates the modal oscillators
-#: ``x_i'' = -(k0_ii + Omega^2 k2_ii) x_i`` exactly (Lawson's integrating-factor RK4) while
-#: ``p[P_VH]`` is 0 (axial flight); 0: plain RK4
+#: ``x_i'' = -(k0_ii + Omega^2 k2_ii) x_i`` exactly (Lawson's integrating-factor RK4); 0: plain RK4
 P_LAWSON = 25
 N_P = 26
 

@@ -162,8 +162,7 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_NS] = phi.shape[1]
     p[P_UNIT_MASS] = float(np.array_equal(minv, np.eye(phi.shape[1])))
     # a reduced basis diagonalises K0 + Omega_ref^2 K2: its oscillators are integrated exactly
-    # in axial flight only: see stable_time_step (the kernel also takes plain RK4 once P_VH > 0)
-    p[P_LAWSON] = float(bool(p[P_UNIT_MASS]) and settings.integrator == "lawson" and flight.is_axial)
+    p[P_LAWSON] = float(bool(p[P_UNIT_MASS]) and settings.integrator == "lawson")
     arrays = ModelArrays(
         p=p, minv=own(minv), k0=own(k0), k2=own(k2), c=phi.T @ structural_damping(s, zeta) @ phi,
         st=own(parts.st), shw=own(shw), shd=own(shd), sht=own(sht), tip=own(tip), teeter=own(teeter),
@@ -345,12 +344,7 @@ def _reduction(s, settings: SolverSettings, omega_ref_rad_s: float):
 
 
 LAWSON_REST_STEP = 0.75  #: dt w_rest of the Lawson step (see stable_time_step)
-
-
-def lawson_step(a: ModelArrays) -> bool:
-    """True if :func:`amra_core.kernels.advance` takes Lawson's step for these arrays (a unit-mass
-    FEM basis compiled for axial flight and still without airspeed), the same test as the kernel's."""
-    return bool(a.p[P_LAWSON] > 0.5 and a.p[P_VH] == 0.0)
+LAWSON_FORWARD_CAP_S = 0.002  #: the Lawson step's cap in forward flight [s] (see stable_time_step)
 
 
 def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
@@ -373,16 +367,12 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     eigenvalue magnitude of the rest there. The amplification of the full linearised mechanics
     (``tests/core/test_lawson.py``) stays within 1 at every rotor speed 0.5 .. 1.3 Omega; its first
     unstable step is 1.47 .. 2.43 times this one (both presets, both FEM levels, GJ 1..1e6).
-    The Lawson step is used in axial flight only (``lawson_step``). In forward flight, capped at
-    2 ms (at 3 ms the rotor speed erred by 3.2e-4 over a kicked mu 0.1 run, beyond ``amra bench``'s
-    1e-4), it kept the maps' critical GJ (fem-coupled mu 0.1, 16 columns: within 0.06 % in 15,
-    -1.7 % in one) but sent the cold-started held-speed trim of paper Table 1 case B (fem-coupled,
-    27 m/s) from tilt 8 deg to the 20 deg bound: thrust-limited, teeter 0.097 rad instead of 0.046.
-    Its residual is the same function of tilt under both steps (to 1e-4); the Newton iteration
-    from the cold start is what is fragile. Until that start is made robust, forward flight keeps
-    plain RK4."""
+    In forward flight the Lawson step is capped at :data:`LAWSON_FORWARD_CAP_S`: the structure's
+    n/rev response reaches the rotor speed through the inertial coupling, and at 3 ms its largest
+    error over a kicked run was 3.2e-4 of the rotor speed (fem-torsion, mu 0.1; 1.6e-5 at 1.5 ms,
+    fourth order), beyond ``amra bench``'s bound of 1e-4 (``tests/core/test_lawson.py``)."""
     a = model.arrays
-    if lawson_step(a):
+    if a.p[P_LAWSON] > 0.5:
         w2 = [0.0]
         for om in (0.0, omega_rad_s):
             K = a.k0 + om**2 * a.k2
@@ -398,4 +388,6 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     c_min = float(a.st[:, S_C].min())
     v_tip = omega_rad_s * model.rotor.radius_m + model.flight.airspeed_m_s + 30.0
     lam_aero = 2.0 * v_tip / c_min * WAGNER_B[1] if model.settings.aero == "theodorsen" else 0.0
-    return min(0.003, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
+    forward = a.p[P_VH] > 0.0 or not model.flight.is_axial
+    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and forward else 0.003
+    return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
