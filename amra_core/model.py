@@ -369,7 +369,7 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     unstable step is 1.47 .. 2.43 times this one (both presets, both FEM levels, GJ 1..1e6).
     In forward flight the Lawson step is capped at :data:`LAWSON_FORWARD_CAP_S`: the structure's
     n/rev response reaches the rotor speed through the inertial coupling, and at 3 ms its largest
-    error over a kicked run was 3.2e-4 of the rotor speed (fem-torsion, mu 0.1; 1.6e-5 at 1.5 ms,
+    error over a kicked run was 3.2e-4 of the rotor speed (fem-torsion, mu 0.1; 2.0e-5 at 1.5 ms,
     fourth order), beyond ``amra bench``'s bound of 1e-4 (``tests/core/test_lawson.py``)."""
     a = model.arrays
     if a.p[P_LAWSON] > 0.5:
