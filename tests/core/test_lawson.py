@@ -3,7 +3,7 @@
 The modal oscillators are integrated exactly and RK4 integrates the rest in their frame. Checked
 here: the step the solver takes keeps the full linearised mechanics stable over the rotor speeds a
 run can meet (a numpy restatement of the step, applied to the linear system of
-``test_time_step.first_order_eigenvalues``); a fixed point of the equations stays one; the method
+``mechanics_helpers.linear_mechanics``); a fixed point of the equations stays one; the method
 is fourth order; and its runs agree with plain RK4 at a step eight times smaller.
 """
 from __future__ import annotations
@@ -13,33 +13,10 @@ import pytest
 
 from amra_core import kernel_guard
 from amra_core.flight import FlightCondition, SolverSettings
-from amra_core.model import (Y_OMEGA, P_CLAG, P_FLAG, P_ILAG, P_IR, P_K2LAG, P_KLAG, P_LAWSON, P_SLAG,
-                             compile_model, stable_time_step)
+from amra_core.model import Y_OMEGA, P_LAWSON, compile_model, stable_time_step
 from amra_core.rotor_io import load_preset
 from amra_core.simulation import COL, Case, Simulation
-
-
-def linear_mechanics(model, om: float):
-    """``A`` of the linearised mechanics at x = 0, rotor speed ``om`` (free), as in
-    ``test_time_step``: state (x, zeta0, zeta1, x', Omega, zeta0', zeta1'); and n, nq."""
-    a, n, p = model.arrays, model.n_s, model.arrays.p
-    N = n + 3
-    Mf = np.zeros((N, N)); Mf[:n, :n] = np.linalg.inv(a.minv); Mf[:n, n] = Mf[n, :n] = a.gy0; Mf[n, n] = p[P_IR]
-    G = np.zeros((N, N)); G[:n, :n] = a.c; G[:n, n] = -2 * om * a.sf; G[n, :n] = 2 * om * a.sf
-    for b in range(2):
-        Mf[:n, n + 1 + b] = Mf[n + 1 + b, :n] = a.gl0[b]
-        Mf[n, n + 1 + b] = Mf[n + 1 + b, n] = p[P_SLAG]
-        Mf[n + 1 + b, n + 1 + b] = p[P_ILAG]
-        G[n, n + 1 + b] = 2 * om * p[P_FLAG]
-        G[n + 1 + b, n] = -2 * om * p[P_FLAG]
-        G[n + 1 + b, n + 1 + b] = p[P_CLAG]
-    nq = n + 2
-    P = np.zeros((nq, N)); P[:n, :n] = np.eye(n); P[n, n + 1] = P[n + 1, n + 2] = 1.0
-    K = np.zeros((nq, nq)); K[:n, :n] = a.k0 + om**2 * a.k2
-    K[n, n] = K[n + 1, n + 1] = p[P_KLAG] + om**2 * p[P_K2LAG]
-    Mi = np.linalg.inv(Mf)
-    A = np.zeros((nq + N, nq + N)); A[:nq, nq:] = P; A[nq:, :nq] = -Mi @ P.T @ K; A[nq:, nq:] = -Mi @ G
-    return A, n, nq
+from mechanics_helpers import linear_mechanics
 
 
 def lawson_step_matrix(A, n, nq, w2, h):

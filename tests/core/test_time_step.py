@@ -23,9 +23,9 @@ import numpy as np
 import pytest
 
 from amra_core.flight import FlightCondition, SolverSettings
-from amra_core.model import (P_CLAG, P_FLAG, P_ILAG, P_IR, P_K2LAG, P_KLAG, P_SLAG, compile_model,
-                             stable_time_step)
+from amra_core.model import compile_model, stable_time_step
 from amra_core.rotor_io import load_preset
+from mechanics_helpers import linear_mechanics
 
 IMAG_LIMIT = 2.0 * np.sqrt(2.0)  #: RK4's stability limit on the imaginary axis
 CAP_S = 0.003
@@ -52,33 +52,7 @@ def ray_limit(lam: complex) -> float:
 def first_order_eigenvalues(model, om: float) -> np.ndarray:
     """Eigenvalues of the linearised mechanics at x = 0, zeta = 0, rotor speed ``om`` (free):
     positions (x, zeta0, zeta1), velocities (x', Omega, zeta0', zeta1')."""
-    a, n, p = model.arrays, model.n_s, model.arrays.p
-    N = n + 3
-    Mf = np.zeros((N, N))
-    Mf[:n, :n] = np.linalg.inv(a.minv)
-    Mf[:n, n] = Mf[n, :n] = a.gy0
-    Mf[n, n] = p[P_IR]
-    G = np.zeros((N, N))  # velocity matrix C + G: damping and the Coriolis coupling with Omega
-    G[:n, :n] = a.c
-    G[:n, n] = -2 * om * a.sf
-    G[n, :n] = 2 * om * a.sf
-    for b in range(2):
-        Mf[:n, n + 1 + b] = Mf[n + 1 + b, :n] = a.gl0[b]
-        Mf[n, n + 1 + b] = Mf[n + 1 + b, n] = p[P_SLAG]
-        Mf[n + 1 + b, n + 1 + b] = p[P_ILAG]
-        G[n, n + 1 + b] = 2 * om * p[P_FLAG]
-        G[n + 1 + b, n] = -2 * om * p[P_FLAG]
-        G[n + 1 + b, n + 1 + b] = p[P_CLAG]
-    nq = n + 2
-    P = np.zeros((nq, N)); P[:n, :n] = np.eye(n); P[n, n + 1] = P[n + 1, n + 2] = 1.0
-    K = np.zeros((nq, nq)); K[:n, :n] = a.k0 + om**2 * a.k2
-    K[n, n] = K[n + 1, n + 1] = p[P_KLAG] + om**2 * p[P_K2LAG]
-    Mi = np.linalg.inv(Mf)
-    A = np.zeros((nq + N, nq + N))
-    A[:nq, nq:] = P
-    A[nq:, :nq] = -Mi @ P.T @ K
-    A[nq:, nq:] = -Mi @ G
-    return np.linalg.eigvals(A)
+    return np.linalg.eigvals(linear_mechanics(model, om)[0])
 
 
 def undamped_step(model, om: float) -> float:
