@@ -132,7 +132,11 @@ def _participation_all(model: CompiledModel, V: np.ndarray, omega: float, real_m
 
 def _modes_from_exponents(model, lam, vecs, omega) -> list:
     modes = []
-    keep = np.nonzero(lam.imag >= -1e-9)[0]  # report each complex pair once
+    # each complex pair once; an exponent without its conjugate (a real negative Floquet multiplier,
+    # unfolded to one branch) is a mode of its own whichever sign its branch has
+    paired = np.array([lam[k].imag < -1e-9 and bool(np.any(np.abs(lam - np.conj(lam[k])) <= 1e-9 * (1 + abs(lam[k]))))
+                       for k in range(len(lam))], dtype=bool)
+    keep = np.nonzero(~paired)[0]
     parts = _participation_all(model, vecs[:, keep], omega, np.abs(lam[keep].imag) < 1e-6)
     for k, part in zip(keep, parts):
         label = "aero lag" if lam[k].real < -AERO_LAG_DECAY else max(part, key=part.get)

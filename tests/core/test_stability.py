@@ -55,3 +55,42 @@ def test_fem_coupled_forward_cell_is_not_a_numerical_failure():
     cell = assess_cell(rotor, FlightCondition(mu=0.1), SolverSettings(fidelity="fem-coupled"))
     print(f"\nfem-coupled mu 0.1 GJ 3000 CG 0.48: {cell.verdict} ({cell.reason})")
     assert cell.verdict != "failed"
+
+
+def test_unpaired_exponent_is_a_mode_whatever_its_branch():
+    """A real negative Floquet multiplier has one exponent, ln|z|/T + i pi/T, and no conjugate;
+    unfolding may move it to a branch with a negative imaginary part. It is still a mode: only the
+    second member of a complex pair is left out (an unstable mode was dropped this way, calling a
+    fluttering trim stable)."""
+    import numpy as np
+    from amra_core.stability import _modes_from_exponents
+    m = compile_model(_paper_rotor(1000.0, 0.36), FlightCondition(mu=0.1), SolverSettings())
+    n = m.n_y - 1
+    lam = np.array([0.62 - 40.6j, -0.5 + 3.0j, -0.5 - 3.0j, -2.0 + 0.0j])
+    vecs = np.zeros((n, 4), dtype=complex)
+    vecs[m.x_slice().start - 1:m.x_slice().stop - 1] = 1.0
+    modes = _modes_from_exponents(m, lam, vecs, 34.0)
+    assert sorted(md.real_part_per_s for md in modes) == pytest.approx([-2.0, -0.5, 0.62])
+    unstable = [md for md in modes if md.real_part_per_s > 0]
+    assert unstable[0].frequency_hz == pytest.approx(40.6 / (2 * 3.141592653589793))
+
+
+def test_real_negative_multiplier_flutter_agrees_with_the_run():
+    """Rigid, mu 0.1, CG 0.32, GJ 231 N m^2/rad (just above the fold at 229): the least damped mode
+    is a torsion flutter whose Floquet multiplier is real and negative (-1.12, growth +0.62 1/s).
+    Before the fix above, the analysis dropped it and called the trim stable (least damped
+    -0.33 1/s), while a run of the same case flutters: a kick grows at the same frequency into a
+    limit cycle. The map and the run now use the same word."""
+    from amra_core.trim import trim
+    rotor = _paper_rotor(231.0, 0.32)
+    fl = FlightCondition(mu=0.1)
+    tr = trim(compile_model(rotor, fl, SolverSettings()))
+    assert tr.ok
+    res = analyse(tr.model, tr)
+    crit = res.critical
+    assert not res.stable and crit.label == "torsion"
+    assert crit.real_part_per_s == pytest.approx(0.62, abs=0.02)
+    v = Simulation(Case(rotor, fl, SolverSettings(), t_end_s=4.0, perturbation=Perturbation(1e-4, 5e-5)),
+                   trim_result=tr).run().verdict()
+    assert v.verdict == "flutter"
+    assert v.frequency_hz == pytest.approx(crit.frequency_hz, rel=0.05)
