@@ -103,6 +103,10 @@ class _Cancelled(Exception):
     pass
 
 
+#: the walk's Floquet analysis in forward flight (``stability.analyse``): only the least damped modes,
+#: which are all the walk and the map read (stability, step control, the critical mode)
+FLOQUET_SCHEME = "krylov"
+
 #: real parts compared along the walk for the step control: the least damped few structural modes
 N_STEP_MODES = 4
 
@@ -152,7 +156,7 @@ class _Walker:
         if branch in ("normal", "overspeed"):
             try:
                 with np.errstate(all="ignore"):
-                    res = analyse(tr.model, tr)
+                    res = analyse(tr.model, tr, FLOQUET_SCHEME)
                 modes = res.modes
                 sig = max(m.real_part_per_s for m in modes) if modes else float("nan")
                 stable = bool(res.stable) and math.isfinite(sig) and branch == "normal"
