@@ -6,8 +6,9 @@ from the secant predictor of the last two points and is accepted only when rotor
 rate, inflow and tip twist continue the branch (:func:`amra_core.trim.on_branch`); otherwise the
 step is halved. It is never restarted from scratch on the branch, so it cannot slip onto the
 windmill-brake root. When the step falls below ``rel_tol`` the branch has ended: that is the
-**fold**, bracketed to ``rel_tol``. At every point the modes are computed (eigenvalues in axial
-flight, Floquet exponents forward) and every sign change of the largest real part is bisected, by
+**fold**, bracketed to ``rel_tol``. At every point the least damped modes are computed
+(eigenvalues in axial flight, Floquet exponents forward by Arnoldi on the monodromy: see
+:data:`FLOQUET_SCHEME`) and every sign change of the largest real part is bisected, by
 continuation from the bracketing points, to ``rel_tol``. The step is at most ``max_step`` (ratio)
 and shrinks where the largest real part heads towards zero, so narrow unstable windows are seen.
 

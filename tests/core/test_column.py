@@ -238,6 +238,23 @@ def test_krylov_floquet_matches_the_full_monodromy(paper, fidelity, cg, gj):
     assert [md.real_part_per_s for md in again.modes] == [md.real_part_per_s for md in kry.modes]
 
 
+def test_axial_least_damped_modes_are_the_full_analysis_ones(paper):
+    """In axial flight the walk's analysis (``"krylov"``) keeps the least damped 20 eigenvalues of the
+    same Jacobian, with the same labels and participations: the same modes as the full analysis,
+    and the same stability decision (rigid CG 0.30: stable at GJ 800, fluttering at 300)."""
+    for gj in (800.0, 300.0):
+        m = _model(paper, 0.30, gj)
+        tr = trim(m)
+        full, least = analyse(m, tr), analyse(m, tr, "krylov")
+        assert least.stable == full.stable == (gj == 800.0)
+        assert len(least.modes) < len(full.modes)
+        key = lambda md: (md.real_part_per_s, md.frequency_hz)  # noqa: E731
+        top = sorted(full.modes, key=key, reverse=True)[:len(least.modes)]
+        got = sorted(least.modes, key=key, reverse=True)
+        assert [(md.label, md.real_part_per_s, md.frequency_hz, md.participation) for md in got] == \
+            [(md.label, md.real_part_per_s, md.frequency_hz, md.participation) for md in top]
+
+
 def test_forward_continuation_matches_trim_forward(paper):
     """The periodic trim continued from a neighbour equals a fresh forward trim of the same model."""
     from amra_core.periodic_trim import PeriodicContinuation
