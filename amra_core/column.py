@@ -119,7 +119,8 @@ def _least_damped(p: BranchPoint) -> list:
 
 
 class _Walker:
-    def __init__(self, rotor, flight, settings, cg, gj_min, gj_max, rel_tol, on_point, cancel, max_step, n_probe):
+    def __init__(self, rotor, flight, settings, cg, gj_min, gj_max, rel_tol, on_point, cancel, max_step, n_probe,
+                 modes=FLOQUET_SCHEME):
         self.base = rotor.with_overrides(x_cg=cg)
         self.flight, self.settings = flight, settings
         self.axial = flight.is_axial
@@ -135,6 +136,7 @@ class _Walker:
         self.top_omega: Optional[float] = None
         self._models: dict = {}
         self.periodic = PeriodicContinuation()
+        self.modes_scheme = modes  #: stability.analyse's scheme at every point
 
     # ---------------------------------------------------------------- models and points
     def model(self, gj: float) -> CompiledModel:
@@ -157,7 +159,7 @@ class _Walker:
         if branch in ("normal", "overspeed"):
             try:
                 with np.errstate(all="ignore"):
-                    res = analyse(tr.model, tr, FLOQUET_SCHEME)
+                    res = analyse(tr.model, tr, self.modes_scheme)
                 modes = res.modes
                 sig = max(m.real_part_per_s for m in modes) if modes else float("nan")
                 stable = bool(res.stable) and math.isfinite(sig) and branch == "normal"
@@ -447,20 +449,22 @@ def walk_column(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
                 gj_min_nm2: float, gj_max_nm2: float, *, rel_tol: float = 0.02,
                 on_point: Optional[Callable[[BranchPoint], None]] = None,
                 cancel: Optional[threading.Event] = None, max_step: float = MAX_STEP,
-                n_probe: int = 7) -> ColumnWalk:
+                n_probe: int = 7, modes: str = FLOQUET_SCHEME) -> ColumnWalk:
     """Walk the CG column ``cg`` [chord fraction] of ``rotor`` (which already carries the EA) from
     ``gj_max_nm2`` down to ``gj_min_nm2`` [N m^2/rad] along its trim branch (module docstring).
     ``on_point(point)`` is called with every :class:`BranchPoint` as it is found (walk order);
     ``cancel``: a ``threading.Event`` checked between points (a cancelled walk returns what it
     has, ``cancelled=True``); ``max_step``: largest GJ ratio of one step; ``n_probe``: coarse
-    grid of the cold-start probes below a fold."""
+    grid of the cold-start probes below a fold; ``modes``: the analysis at each point
+    (``stability.analyse``'s scheme): :data:`FLOQUET_SCHEME`, the least damped modes (the map), or
+    ``"forward"``, every mode (the dashboard's root locus draws them all)."""
     if not 0 < gj_min_nm2 < gj_max_nm2:
         raise ValueError(f"gj_min_nm2 = {gj_min_nm2!r}, gj_max_nm2 = {gj_max_nm2!r}: need 0 < gj_min < gj_max")
     if not 0 < rel_tol < 1:
         raise ValueError(f"rel_tol = {rel_tol!r} is not allowed: must be in (0, 1)")
     t0 = time.perf_counter()
     w = _Walker(rotor, flight, settings, cg, gj_min_nm2, gj_max_nm2, rel_tol, on_point, cancel, max_step,
-                max(int(n_probe), 2))
+                max(int(n_probe), 2), modes)
     cancelled, fold = False, None
     try:
         fold = w.run()

@@ -86,7 +86,8 @@ def locus_result(rotor, flight, settings, cg: float) -> dict:
     fold and flutter crossings bracketed."""
     from amra_core.column import walk_column
     with np.errstate(all="ignore"):
-        cw = walk_column(rotor, flight, settings, cg, LOCUS_GJ_RANGE[0], LOCUS_GJ_RANGE[1], rel_tol=LOCUS_REL_TOL)
+        cw = walk_column(rotor, flight, settings, cg, LOCUS_GJ_RANGE[0], LOCUS_GJ_RANGE[1], rel_tol=LOCUS_REL_TOL,
+                         modes="forward")  # every mode: the locus draws them all
     pts = []
     for p in cw.points:
         trimmed = p.branch == "normal" and p.trim is not None

@@ -269,6 +269,19 @@ def test_axial_least_damped_modes_are_the_full_analysis_ones(paper):
             [(md.label, md.real_part_per_s, md.frequency_hz, md.participation) for md in top]
 
 
+def test_walk_reports_every_mode_when_asked(paper):
+    """The map's walk keeps the least damped modes; the dashboard's root locus asks for every mode
+    (``modes="forward"``) and gets the full analysis at each point (fem-coupled, mu 0.1)."""
+    fl, st = FlightCondition(mu=0.1), SolverSettings(fidelity="fem-coupled")
+    rotor = paper.with_overrides(x_ea=EA)
+    every = walk_column(rotor, fl, st, 0.36, 1500.0, 3000.0, modes="forward")
+    least = walk_column(rotor, fl, st, 0.36, 1500.0, 3000.0)
+    p = every.points[-1]
+    full = analyse(p.trim.model, p.trim)
+    assert len(p.modes) == len(full.modes) > len(least.points[-1].modes)
+    assert every.critical_gj_nm2 == least.critical_gj_nm2
+
+
 def test_forward_continuation_matches_trim_forward(paper):
     """The periodic trim continued from a neighbour equals a fresh forward trim of the same model."""
     from amra_core.periodic_trim import PeriodicContinuation
