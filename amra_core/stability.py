@@ -134,8 +134,8 @@ def _modes_from_exponents(model, lam, vecs, omega) -> list:
     modes = []
     # each complex pair once; an exponent without its conjugate (a real negative Floquet multiplier,
     # unfolded to one branch) is a mode of its own whichever sign its branch has
-    paired = np.array([lam[k].imag < -1e-9 and bool(np.any(np.abs(lam - np.conj(lam[k])) <= 1e-9 * (1 + abs(lam[k]))))
-                       for k in range(len(lam))], dtype=bool)
+    has_conjugate = np.any(np.abs(lam[:, None] - np.conj(lam)[None, :]) <= 1e-9 * (1 + np.abs(lam))[:, None], axis=1)
+    paired = (lam.imag < -1e-9) & has_conjugate
     keep = np.nonzero(~paired)[0]
     parts = _participation_all(model, vecs[:, keep], omega, np.abs(lam[keep].imag) < 1e-6)
     for k, part in zip(keep, parts):
@@ -157,6 +157,24 @@ def jacobian(model: CompiledModel, y0: np.ndarray) -> np.ndarray:
     return J
 
 
+#: relative difference steps of the monodromy's columns (see :func:`monodromy`)
+FD_STEP_FORWARD = 3e-6
+FD_STEP_CENTRAL = 1e-6
+
+
+def _one_revolution(model: CompiledModel, y0: np.ndarray, dt: float):
+    """``(march, T)``: ``march(y)`` advances ``y`` in place by one revolution ``T`` [s] of the rotor
+    speed of ``y0``, in whole steps of at most ``dt`` (at least 32), and returns it."""
+    steps = max(int(round(2 * math.pi / y0[Y_OMEGA] / dt)), 32)
+    T = 2 * math.pi / y0[Y_OMEGA]
+    hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, len(y0)))
+
+    def march(y: np.ndarray) -> np.ndarray:
+        kernel_guard.advance(y, 0.0, T / steps, steps, 10**9, model.arrays, hist, st, -1.0)
+        return y
+    return march, T
+
+
 def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "forward"):
     """One-revolution state transition (without psi); returns (Phi, T).
 
@@ -171,25 +189,20 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "fo
     ``'central'``: central differences (2 n marches)."""
     if scheme not in ("forward", "central"):
         raise ValueError(f"scheme = {scheme!r} is not allowed: choose 'forward' or 'central'")
-    omega = y0[Y_OMEGA]
-    steps = max(int(round(2 * math.pi / omega / dt)), 32)
-    T = 2 * math.pi / omega
-    h_dt = T / steps
+    march, T = _one_revolution(model, y0, dt)
     n = len(y0)
-    hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, n))
     Phi = np.zeros((n - 1, n - 1))
     if scheme == "forward":
-        yb = y0.copy()
-        kernel_guard.advance(yb, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+        yb = march(y0.copy())
     for i in range(1, n):
-        h = (3e-6 if scheme == "forward" else 1e-6) * max(1.0, abs(y0[i]))
+        h = (FD_STEP_FORWARD if scheme == "forward" else FD_STEP_CENTRAL) * max(1.0, abs(y0[i]))
         yp = y0.copy(); yp[i] += h
-        kernel_guard.advance(yp, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+        march(yp)
         if scheme == "forward":
             Phi[:, i - 1] = (yp[1:] - yb[1:]) / h
         else:
             ym = y0.copy(); ym[i] -= h
-            kernel_guard.advance(ym, 0.0, h_dt, steps, 10**9, model.arrays, hist, st, -1.0)
+            march(ym)
             Phi[:, i - 1] = (yp[1:] - ym[1:]) / (2 * h)
     return Phi, T
 
@@ -212,22 +225,15 @@ def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int
     The multipliers of the Wagner lag states (e^(-T/tau), about 1e-3 here) and of the well damped
     structural modes form a cluster far inside the least damped few, so those converge in about
     half the ``n + 1`` revolutions of the full matrix (32 of 66 at rigid, 51-54 of 106 at
-    fem-coupled, mu 0.1: ``tests/core/test_column.py``). Deterministic (a fixed start vector), so a map is repeatable.
+    fem-coupled, mu 0.1: ``tests/core/test_column.py``). Deterministic (a fixed start vector), so a
+    map is repeatable.
     Returns ``(z, V, T, revolutions, n_resolved, converged)``: the Ritz values sorted by magnitude
     (descending; the first ``n_resolved`` are the resolved multipliers, the rest are rough
     estimates of the remaining spectrum), their vectors (columns, state without psi), the period
     [s], the revolutions marched, and whether the resolved ones met :data:`KRYLOV_TOL` within
     :data:`KRYLOV_MAX_DIM` vectors (:func:`analyse` forms the full matrix when they did not)."""
-    omega = y0[Y_OMEGA]
-    steps = max(int(round(2 * math.pi / omega / dt)), 32)
-    T = 2 * math.pi / omega
+    march, T = _one_revolution(model, y0, dt)
     n = len(y0) - 1
-    hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, n + 1))
-
-    def march(y):
-        kernel_guard.advance(y, 0.0, T / steps, steps, 10**9, model.arrays, hist, st, -1.0)
-        return y
-
     scale = np.maximum(1.0, np.abs(y0[1:]))
     base = march(y0.copy())[1:]
     m_max = min(n, KRYLOV_MAX_DIM)
@@ -236,8 +242,8 @@ def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int
     Q[:, 0] = q / np.linalg.norm(q)
     revs = 1
     for j in range(m_max):
-        y = y0.copy(); y[1:] += 3e-6 * scale * Q[:, j]
-        w = (march(y)[1:] - base) / 3e-6 / scale
+        y = y0.copy(); y[1:] += FD_STEP_FORWARD * scale * Q[:, j]
+        w = (march(y)[1:] - base) / FD_STEP_FORWARD / scale
         revs += 1
         for _ in range(2):  # classical Gram-Schmidt, twice: orthogonal to round-off
             c = Q[:, :j + 1].T @ w
