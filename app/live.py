@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pandas as pd
 from bokeh.events import RangesUpdate, Reset
-from bokeh.models import ColumnDataSource, DataRange1d, HoverTool, LabelSet, Legend
+from bokeh.models import ColumnDataSource, DataRange1d, HoverTool, LabelSet, Legend, Line, VSpan
 from bokeh.plotting import figure
 from tsdownsample import MinMaxDownsampler, NaNMinMaxDownsampler
 
@@ -51,13 +51,6 @@ def columns_from_rows(rows: np.ndarray, gj_nm2: float) -> dict:
             "teeter_deg": rows[:, COL["teeter_rad"]] * deg, "twist0_deg": rows[:, COL["tip_twist_0_rad"]] * deg,
             "twist1_deg": rows[:, COL["tip_twist_1_rad"]] * deg,
             "descent_m_s": rows[:, COL["descent_rate_m_s"]].copy(), "gj_nm2": np.full(len(rows), float(gj_nm2))}
-
-
-def _lean(renderer) -> None:
-    """The renderer's unselected and muted looks derived in the browser ("auto", Bokeh's default for
-    a renderer made without the figure's helpers) instead of two more glyph models each in every
-    page: these plots have no selection and no muting."""
-    renderer.update(nonselection_glyph="auto", muted_glyph="auto")
 
 
 def _empty(curves) -> dict:
@@ -198,14 +191,15 @@ class LivePlots:
                          tools="pan,box_zoom,wheel_zoom,reset,save", x_axis_label=label("t_s"),
                          y_axis_label=label(curves[0]), output_backend="canvas")
             items = []
+            # one glyph per renderer (add_glyph): the unselected and muted looks are derived in the
+            # browser, not two more glyph models each in every page (no selection, no muting here)
             for col, colour, name in zip(curves, colours, ("blade 0", "blade 1") if len(curves) == 2 else ("run",)):
-                r = fig.line("t_s", col, source=src, line_width=2, color=colour)
+                r = fig.add_glyph(src, Line(x="t_s", y=col, line_width=2, line_color=colour))
                 items.append((name, [r]))
-                _lean(r)
             tips = [("t", "@t_s{0.000} s"), (UNITS[curves[0]][0], f"@{curves[0]}{{0.000}} {UNITS[curves[0]][1]}"),
                     ("GJ", "@gj_nm2{0.0} N m²/rad")]
             fig.add_tools(HoverTool(tooltips=tips, mode="vline", renderers=[r]))
-            _lean(fig.vspan(x="t_s", source=self.markers, line_color="#37474f", line_dash="dashed", line_width=1.5))
+            fig.add_glyph(self.markers, VSpan(x="t_s", line_color="#37474f", line_dash="dashed", line_width=1.5))
             fig.add_layout(LabelSet(x="t_s", y=4, y_units="screen", text="text", source=self.markers,
                                     text_font_size="11px", text_color="#37474f", x_offset=3))
             if len(curves) == 2:

@@ -16,7 +16,8 @@ import time
 import numpy as np
 import panel as pn
 from bokeh.events import Tap
-from bokeh.models import CDSView, ColumnDataSource, GroupFilter, HoverTool, Legend, LegendItem, Range1d
+from bokeh.models import (CDSView, ColumnDataSource, GroupFilter, HoverTool, Legend, LegendItem, Line, Quad, Range1d,
+                          Scatter, Segment, VSpan)
 from bokeh.plotting import figure
 
 from amra_core.boundary import MapSpec, cell_class
@@ -239,43 +240,49 @@ class MapView(pn.viewable.Viewer):
                      y_axis_type="log", x_range=Range1d(18, 52), y_range=Range1d(25, 3600),
                      x_axis_label=CG_LABEL, y_axis_label=GJ_LABEL, tools="pan,wheel_zoom,box_zoom,reset,save",
                      output_backend="canvas", name="map-plot")
-        # one renderer per class, so the legend keeps one order whatever class a map meets first
+        # one renderer per class, so the legend keeps one order whatever class a map meets first; every
+        # renderer has its one glyph (add_glyph: unselected and muted looks derived in the browser, two
+        # models fewer each than the plotting helpers make: the map is drawn in every page)
         cells, class_items = [], []
         for cls, colour in CLASS_COLOURS.items():
-            r = fig.scatter("cg_pct", "gj_nm2", source=self.cells_source, marker="square", size=11, color=colour,
-                            view=CDSView(filter=GroupFilter(column_name="class", group=cls)))
+            r = fig.add_glyph(self.cells_source, Scatter(x="cg_pct", y="gj_nm2", marker="square", size=11,
+                                                         fill_color=colour, line_color=colour),
+                              view=CDSView(filter=GroupFilter(column_name="class", group=cls)))
             cells.append(r)
             class_items.append(LegendItem(label=cls, renderers=[r]))
         fig.add_tools(HoverTool(renderers=cells, tooltips=[
             ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
             ("verdict", "@verdict"), ("growth rate", "@growth_rate_per_s{0.000} 1/s")]))
-        items = []
-        strong = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.band_sources["strong"],
-                          fill_color="#c62828", fill_alpha=0.35, line_color="#c62828")
-        weak = fig.quad(left="left", right="right", bottom="bottom", top="top", source=self.band_sources["weak"],
-                        fill_color="#ef9a9a", fill_alpha=0.15, line_color="#ef9a9a", line_dash="dotted",
-                        hatch_pattern="/", hatch_color="#e57373", hatch_alpha=0.5)
-        items += [LegendItem(label="strong flutter (this map)", renderers=[strong]),
-                  LegendItem(label="weak window (does not set GJ)", renderers=[weak])]
+        band = {"left": "left", "right": "right", "bottom": "bottom", "top": "top"}
+        strong = fig.add_glyph(self.band_sources["strong"], Quad(**band, fill_color="#c62828", fill_alpha=0.35,
+                                                                 line_color="#c62828"))
+        weak = fig.add_glyph(self.band_sources["weak"], Quad(**band, fill_color="#ef9a9a", fill_alpha=0.15,
+                                                             line_color="#ef9a9a", line_dash="dotted", hatch_pattern="/",
+                                                             hatch_color="#e57373", hatch_alpha=0.5))
+        items = [LegendItem(label="strong flutter (this map)", renderers=[strong]),
+                 LegendItem(label="weak window (does not set GJ)", renderers=[weak])]
         fig.add_tools(HoverTool(renderers=[strong, weak], tooltips=[("", "@text")]))
+        xy = {"x": "cg_pct", "y": "gj_nm2"}
         for fid, colour in FIDELITY_COLOURS.items():
-            fold = fig.line("cg_pct", "gj_nm2", source=self.fold_sources[fid], color=colour, line_width=3)
-            fig.scatter("cg_pct", "gj_nm2", source=self.fold_sources[fid], color=colour, size=6)
-            flutter = fig.line("cg_pct", "gj_nm2", source=self.flutter_sources[fid], color=colour, line_width=2.5,
-                               line_dash="dashed")
-            fig.scatter("cg_pct", "gj_nm2", source=self.flutter_sources[fid], color=colour, marker="triangle", size=8)
+            dots = {"fill_color": colour, "line_color": colour}
+            fold = fig.add_glyph(self.fold_sources[fid], Line(**xy, line_color=colour, line_width=3))
+            fig.add_glyph(self.fold_sources[fid], Scatter(**xy, size=6, **dots))
+            flutter = fig.add_glyph(self.flutter_sources[fid], Line(**xy, line_color=colour, line_width=2.5,
+                                                                    line_dash="dashed"))
+            fig.add_glyph(self.flutter_sources[fid], Scatter(**xy, marker="triangle", size=8, **dots))
             items += [LegendItem(label=f"{fid}: fold", renderers=[fold]),
                       LegendItem(label=f"{fid}: strong flutter", renderers=[flutter])]
-        sens = fig.segment(x0="cg_pct", y0="lo", x1="cg_pct", y1="hi", source=self.sens_source, line_color="#000000",
-                           line_width=7, line_alpha=0.3)
+        sens = fig.add_glyph(self.sens_source, Segment(x0="cg_pct", y0="lo", x1="cg_pct", y1="hi", line_color="#000000",
+                                                       line_width=7, line_alpha=0.3))
         for end in ("lo", "hi"):
-            fig.scatter("cg_pct", end, source=self.sens_source, marker="dash", size=16, line_width=2, color="#000000")
+            fig.add_glyph(self.sens_source, Scatter(x="cg_pct", y=end, marker="dash", size=16, line_width=2,
+                                                    line_color="#000000", fill_color="#000000"))
         fig.add_tools(HoverTool(renderers=[sens], tooltips=[("", "@text")]))
         items.append(LegendItem(label="sensitivity band (estimates ±10 %)", renderers=[sens]))
-        star = fig.scatter("cg_pct", "gj_nm2", source=self.marker_source, marker="star", size=20, color="gold",
-                           line_color="black")
+        star = fig.add_glyph(self.marker_source, Scatter(**xy, marker="star", size=20, fill_color="gold",
+                                                         line_color="black"))
         items.append(LegendItem(label="current case", renderers=[star]))
-        ea = fig.vspan(x="x", source=self.ea_source, line_color="black", line_width=1.5, line_dash="dotted")
+        ea = fig.add_glyph(self.ea_source, VSpan(x="x", line_color="black", line_width=1.5, line_dash="dotted"))
         items.append(LegendItem(label="elastic axis (EA)", renderers=[ea]))
         classes = Legend(items=class_items, location="top_left", title="cells")
         fig.add_layout(classes, "right")

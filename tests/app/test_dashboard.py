@@ -194,6 +194,19 @@ def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
     assert {"amra-run", "amra-stop", "amra-reset", "amra-gj", "amra-gj-slider", "amra-upload"} <= classes
 
 
+def test_the_figures_every_page_builds_have_one_glyph_per_renderer(dash):
+    """The live plots and the map are built for every page: each renderer carries its one glyph
+    model, its unselected and muted looks derived in the browser (they use neither selection nor
+    muting); the plotting helpers would add two glyph models per renderer (48 in the map alone)."""
+    from bokeh.models import GlyphRenderer
+    figures = [*dash.live.figures(), dash.map.figure()]
+    renderers = [r for f in figures for r in f.renderers if isinstance(r, GlyphRenderer)]
+    assert len(renderers) >= 30
+    assert all(r.nonselection_glyph == "auto" and r.muted_glyph == "auto" for r in renderers)
+    glyphs = [m for f in figures for m in f.references() if m.__class__.__module__.startswith("bokeh.models.glyphs")]
+    assert len(glyphs) == len(renderers)
+
+
 def test_the_gj_slider_and_input_are_two_views_of_one_parameter(dash):
     import math
     from app.inputs import gj_slider
