@@ -20,8 +20,12 @@ reported beside the axial figures, with the largest rotor-speed error after the 
 it exceeds the bounds. Measured 2026-12-06 (mccutcheon, largest rotor-speed error, all of it in the
 kick's first 50 ms): at mu 0.1 the rigid level's 3 ms step gives 2.1e-4 (4.4e-5 at 2 ms; 7.5e-7
 after the kick), the FEM levels' 2 ms forward cap 6.7e-5 and 8.9e-5; at mu 0.3 every level exceeds
-it (rigid 1.5e-3 at 2.84 ms, fem-torsion 8.4e-4 at 2 ms). Whether forward runs should take shorter
-steps (1.5-2 times slower forward runs and maps) is an open decision of issue 24."""
+it (rigid 1.5e-3 at 2.84 ms, fem-torsion 8.4e-4 at 2 ms). What rings is the stiff lag mode, the
+blades' lag against the rotor's inertia (62.9 Hz, damped at 28 1/s; the error's spectrum peaks at
+62.6 Hz, ``tests/core/test_bench.py``), which the forward kick excites and the axial one does not;
+RK4 at 3 ms adds about 5 1/s of numerical damping to it and nothing that matters to the 8.5 Hz lag
+mode. Whether forward runs should take shorter steps (1.5-2 times slower forward runs and maps) is
+an open decision of issue 24."""
 from __future__ import annotations
 
 import json
