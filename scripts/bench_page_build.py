@@ -2,12 +2,17 @@
 a test): the session's :class:`app.app.Dashboard`, its layout and the Bokeh document of the page with
 its first tab (the boundary map; outside a server Panel builds the deferred tabs area at once).
 
-The served figure (``amra serve``'s "page built in" log lines, ``scripts/load_test.py``) leaves the
-deferred tabs out and varies by +/- 40 ms from page to page with the server's garbage collections;
-this one, averaged over many pages in a quiet process, shows what a change to the page costs.
-Pin it to one core for comparable figures:
+The served figure leaves the deferred tabs out and varies by +/- 40 ms from page to page with the
+server's garbage collections; this one, averaged over many pages in a quiet process, shows what a
+change to the page costs. Pin it to one core for comparable figures:
 
     taskset -c 0 python scripts/bench_page_build.py [--pages 30]
+
+``--served`` measures the served figure instead: ``amra serve`` on CPU 0 (``scripts/load_test.py``'s
+server), the pages opened one after another in headless Chromium on CPU 1, and the server's own
+"page built in" log lines (the first page, which warms the process, left out):
+
+    python scripts/bench_page_build.py --served [--pages 15]
 """
 from __future__ import annotations
 
@@ -32,8 +37,12 @@ class _NoPool:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--pages", type=int, default=30)
+    ap.add_argument("--pages", type=int, default=None, help="pages to build (30; served: 15)")
+    ap.add_argument("--served", action="store_true", help="the served page build (amra serve, Chromium)")
     args = ap.parse_args(argv)
+    if args.served:
+        return served(args.pages or 15)
+    args.pages = args.pages or 30
     import holoviews as hv
     import panel as pn
     from bokeh.document import Document
@@ -65,6 +74,31 @@ def main(argv=None) -> int:
                       "min_ms": round(1e3 * min(times), 1), "bokeh_models": sum(models.values()),
                       "most_common_models": dict(models.most_common(8))}, indent=1))
     registry.close()
+    return 0
+
+
+def served(pages: int) -> int:
+    """Server time of ``pages`` + 1 served pages (module docstring)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from load_test import Server, wrapped_chromium
+    from playwright.sync_api import sync_playwright
+    server = Server(cpus="0")
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=wrapped_chromium(0, "1"))
+            for _ in range(pages + 1):
+                page = browser.new_page()
+                page.goto(server.url)
+                page.wait_for_selector(".amra-run", timeout=60_000)
+                page.wait_for_timeout(1000)  # the deferred tabs arrive after the first paint
+                page.close()
+            browser.close()
+        builds = server.page_builds_s()[1:]
+    finally:
+        server.stop()
+    print(json.dumps({"pages": len(builds), "median_s": round(statistics.median(builds), 3),
+                      "mean_s": round(statistics.mean(builds), 3), "min_s": round(min(builds), 3),
+                      "max_s": round(max(builds), 3)}, indent=1))
     return 0
 
 
