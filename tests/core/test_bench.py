@@ -62,8 +62,8 @@ def test_the_kicks_rotor_speed_error_is_the_collective_lag_mode_ringing():
     against one 64 times finer oscillates at the frequency of the stiff lag mode of the eigen-analysis
     (62.9 Hz, damped at 28 1/s: measured spectrum peak 62.6 Hz), the blade lag against the rotor's
     inertia, which the forward kick excites and the axial one does not. RK4 at 3 ms adds about
-    5 1/s of numerical damping to that mode (w dt = 1.19), and none that matters to the 8.5 Hz lag
-    mode that can approach instability (damping ratio 0.01)."""
+    5 1/s of numerical damping to that mode (w dt = 1.19), and none that matters to the lightly
+    damped 8.5 Hz lag mode (damping ratio 0.01, w dt = 0.16)."""
     import numpy as np
     from amra_core.flight import FlightCondition, SolverSettings
     from amra_core.model import compile_model
