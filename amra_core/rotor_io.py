@@ -86,13 +86,17 @@ def read_rotor_text(path) -> str:
             chunks.append(b)
     finally:
         os.close(fd)
-    data = b"".join(chunks)
+    return decode_rotor_bytes(b"".join(chunks), p)
+
+
+def decode_rotor_bytes(data: bytes, source: str) -> str:
+    """``data`` as UTF-8 text; :class:`RotorError` naming ``source`` and the first bad byte otherwise."""
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = data[:exc.start].count(b"\n") + 1
-        raise RotorError(f"rotor file {p!r} is not UTF-8 text: byte {data[exc.start]:#04x} at offset {exc.start} "
-                         f"(line {line}); is it a binary file?") from None
+        raise RotorError(f"rotor file {source!r} is not UTF-8 text: byte {data[exc.start]:#04x} at offset "
+                         f"{exc.start} (line {line}); is it a binary file?") from None
 
 
 def prescan_toml(text: str) -> None:
@@ -153,21 +157,28 @@ def prescan_toml(text: str) -> None:
 def load_rotor_file(path) -> Rotor:
     """A rotor from a TOML file; clear :class:`RotorError` for every kind of bad input."""
     path = Path(path)
-    text = read_rotor_text(path)
+    return rotor_from_toml(read_rotor_text(path), str(path), short_name=path.name)
+
+
+def rotor_from_toml(text: str, source: str, short_name: str | None = None) -> Rotor:
+    """A rotor from the text of a TOML rotor file, whatever it came from (a file, a browser's
+    upload): prescanned (:func:`prescan_toml`) before it is parsed, so no input makes the parser
+    recurse too deep or grow without bound; a clear :class:`RotorError` naming ``source`` for every
+    kind of bad input (``short_name``, if given, names it in the messages about the values)."""
     try:
         prescan_toml(text)
     except RotorError as exc:
-        raise RotorError(f"rotor file {str(path)!r}: {exc}") from None
+        raise RotorError(f"rotor file {source!r}: {exc}") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise RotorError(f"rotor file {str(path)!r} is not valid TOML: {exc}") from None
+        raise RotorError(f"rotor file {source!r} is not valid TOML: {exc}") from None
     except (RecursionError, MemoryError):
-        raise RotorError(f"rotor file {str(path)!r} is too deeply nested or too large to parse") from None
+        raise RotorError(f"rotor file {source!r} is too deeply nested or too large to parse") from None
     try:
         return rotor_from_dict(data)
     except RotorError as exc:
-        raise RotorError(f"{path.name}: {exc}") from None
+        raise RotorError(f"{short_name}: {exc}" if short_name else f"rotor file {source!r}: {exc}") from None
 
 
 def rotor_from_dict(data: dict) -> Rotor:

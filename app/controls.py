@@ -10,7 +10,6 @@ validation (``SettingsError``, ``RotorError``) then names anything the bounds ca
 from __future__ import annotations
 
 import math
-import tomllib
 import urllib.parse
 from dataclasses import dataclass
 from types import MappingProxyType
@@ -20,7 +19,7 @@ import param
 from amra_core.flight import AERO_MODELS, INFLOW_MODELS, FlightCondition, SolverSettings
 from amra_core.paper_cases import NOMINAL_GJ_NM2, PAPER_CASES
 from amra_core.rotor import Rotor, RotorError
-from amra_core.rotor_io import load_preset, preset_names, rotor_from_dict
+from amra_core.rotor_io import decode_rotor_bytes, load_preset, preset_names, rotor_from_toml
 from amra_core.scenario import LiveChange, Scenario
 from amra_core.shapes import FIDELITIES
 from amra_core.simulation import Case
@@ -316,7 +315,9 @@ class UploadError(ValueError):
 
 def parse_rotor_upload(data: bytes | None, filename: str = "upload") -> Rotor:
     """A :class:`Rotor` from the bytes of a TOML rotor file (``assets/rotors/*.toml``), parsed from
-    memory with a size cap."""
+    memory with a size cap, by the core's own reader of rotor files
+    (:func:`amra_core.rotor_io.rotor_from_toml`: its prescan refuses what would make the parser
+    recurse or grow without bound)."""
     name = filename or "upload"
     if not data:
         raise UploadError(f"rotor file {name!r} is empty")
@@ -324,10 +325,6 @@ def parse_rotor_upload(data: bytes | None, filename: str = "upload") -> Rotor:
         raise UploadError(f"rotor file {name!r} is {len(data) / 1024:.0f} kB: too large "
                           f"(a rotor description is a few kB; the limit is {MAX_BYTES // 1024} kB)")
     try:
-        return rotor_from_dict(tomllib.loads(data.decode("utf-8")))
-    except UnicodeDecodeError:
-        raise UploadError(f"rotor file {name!r} is not UTF-8 text (expected a TOML rotor description)") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise UploadError(f"rotor file {name!r} is not valid TOML: {exc}") from None
-    except (RotorError, TypeError, ValueError) as exc:
-        raise UploadError(f"rotor file {name!r}: {exc}") from None
+        return rotor_from_toml(decode_rotor_bytes(data, name), name)
+    except RotorError as exc:
+        raise UploadError(str(exc)) from None
