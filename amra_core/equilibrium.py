@@ -21,7 +21,7 @@ from typing import Optional
 import numpy as np
 from scipy.optimize import root
 
-from . import kernel_guard, kernels, trim_kernels
+from . import kernel_guard, kernels, trim_kernels, verdict
 from .model import (L_THRUST, L_TORQUE, CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step,
                     transfer_state)
 from .shooting import PeriodicShooting, steps_per_rev
@@ -459,7 +459,7 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
                                 hold_omega=omega_hold is not None, hold_vd=omega_hold is not None)
     return TrimResult("trimmed", y.copy(), vals["omega"], vals["vd"], vals["tilt"], speed(vals),
                       float(y[Y_V0]), float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]),
-                      _teeter_amplitude(last), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final,
+                      verdict.teeter_amplitude_rad(last), float(np.mean(last[:, H["tip_twist_0_rad"]])), model=final,
                       shooting=shooting)
 
 
@@ -582,12 +582,6 @@ def _plausible(res: TrimResult, prev: Optional[TrimResult]) -> bool:
     return True
 
 
-def _teeter_amplitude(last: np.ndarray) -> float:
-    H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
-    beta, psi = last[:, H["teeter_rad"]], last[:, H["azimuth_rad"]]
-    return float(math.hypot(2 * np.mean(beta * np.cos(psi)), 2 * np.mean(beta * np.sin(psi))))
-
-
 def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y0: np.ndarray, dt: float) -> TrimResult:
     """Level flight at a held rotor speed where lift cannot reach the weight: scan the shaft tilt
     for the largest revolution-averaged vertical force and report it (status ``thrust-limited``)
@@ -603,7 +597,7 @@ def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y
     tilt_deg, avg, last, yb = best
     weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
     res = TrimResult("thrust-limited", yb, omega, 0.0, math.radians(tilt_deg), airspeed_m_s, float(yb[Y_V0]),
-                     float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]), _teeter_amplitude(last),
+                     float(avg[H["thrust_n"]]), float(avg[H["torque_nm"]]), verdict.teeter_amplitude_rad(last),
                      float(np.mean(last[:, H["tip_twist_0_rad"]])), model=model)
     res.reason = (f"with the rotor speed held at {omega:g} rad/s the largest vertical force in level flight is "
                   f"{avg[H['vertical_force_n']]:.0f} N ({100 * avg[H['vertical_force_n']] / weight:.0f} % of the weight "

@@ -20,7 +20,8 @@ import numpy as np
 
 from . import kernels
 from .model import CompiledModel, Y_OMEGA, Y_V0, Y_VD, stable_time_step, transfer_state
-from .equilibrium import TrimResult, _march_revs, _teeter_amplitude, gj_mean_of, omega_guess
+from .equilibrium import TrimResult, _march_revs, gj_mean_of, omega_guess
+from . import verdict
 from .shooting import PeriodicShooting
 
 _H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
@@ -135,5 +136,5 @@ class PeriodicContinuation:
         v = self._airspeed(model, z[0], z[2])
         final = model.with_controls(alpha_s_rad=z[2], airspeed_m_s=v, hold_omega=False, hold_vd=False)
         return TrimResult("trimmed", y.copy(), float(z[0]), float(z[1]), float(z[2]), v, float(y[Y_V0]),
-                          float(avg[_H["thrust_n"]]), float(avg[_H["torque_nm"]]), _teeter_amplitude(last),
+                          float(avg[_H["thrust_n"]]), float(avg[_H["torque_nm"]]), verdict.teeter_amplitude_rad(last),
                           float(np.mean(last[:, _H["tip_twist_0_rad"]])), model=final)

@@ -32,7 +32,7 @@ from typing import Optional
 
 import numpy as np
 
-from .kernels import EMP_BLEND
+from .kernels import EMP_BLEND, HISTORY_COLUMNS
 
 #: ``undetermined``: no data yet, or a run too short to identify a growth rate (the explanation
 #: says which and how long a run is needed); neither stable nor unstable, never counted as either
@@ -198,6 +198,21 @@ def _limit_cycle(h, cols, d, scale, axial) -> dict:
     return {"twist_deg": float(math.degrees(half * np.ptp(tw))) if len(tw) else None,
             "teeter_deg": float(math.degrees(half * np.ptp(te))) if len(te) else None,
             "omega_rad_s": float(0.5 * np.ptp(om)) if len(om) else None}
+
+
+def teeter_amplitude_rad(history: np.ndarray) -> float:
+    """First-harmonic (1/rev) teeter amplitude [rad] over the last revolution of ``history`` (rows of
+    :data:`amra_core.kernels.HISTORY_COLUMNS`): the amplitude paper Table 1 compares with the flight
+    measurements. The trim reports it for its periodic revolution, a run for its last one, the
+    dashboard and ``amra simulate`` alike."""
+    t, beta, psi, om = (history[:, HISTORY_COLUMNS.index(c)] for c in ("t_s", "teeter_rad", "azimuth_rad",
+                                                                          "omega_rad_s"))
+    if not len(t):
+        return math.nan
+    period = 2 * math.pi / max(float(om[-1]), 1e-6)
+    last = t > t[-1] - period + 1e-9 * period  # one revolution's samples, its start not counted twice
+    beta, psi = beta[last], psi[last]
+    return float(math.hypot(2 * np.mean(beta * np.cos(psi)), 2 * np.mean(beta * np.sin(psi))))
 
 
 def oscillation_amplitudes(history: np.ndarray, columns, omega_ref: float, axial: bool, ref_row: np.ndarray,

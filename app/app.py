@@ -16,6 +16,7 @@ import panel as pn
 from amra_core.boundary import MapSpec
 from amra_core.paper_cases import NOMINAL_GJ_NM2
 from amra_core.shapes import FIDELITIES
+from amra_core.verdict import teeter_amplitude_rad
 
 from . import compute, exports
 from .controls import LIVE_PARAMETERS, PRESETS, UPLOADED, Controls, UploadError, parse_rotor_upload
@@ -56,15 +57,6 @@ def case_label(c: Controls, scenario) -> str:
           else f"GJ {c.gj_nm2:.4g} N m²/rad")
     name = PRESETS[c.preset].label if c.preset != "custom" else c.rotor
     return f"{name} · {c.fidelity} · {gj} · EA {c.ea_pct:g} % · CG {c.cg_pct:g} % · {flight}"
-
-
-def teeter_amplitude_rad(history: np.ndarray) -> float:
-    """First-harmonic (1/rev) teeter amplitude [rad] over the last revolution of a history."""
-    from amra_core.simulation import COL
-    omega = max(float(history[-1, COL["omega_rad_s"]]), 1e-6)
-    last = history[history[:, COL["t_s"]] >= history[-1, COL["t_s"]] - 2 * np.pi / omega]
-    beta, psi = last[:, COL["teeter_rad"]], last[:, COL["azimuth_rad"]]
-    return float(np.hypot(2 * np.mean(beta * np.cos(psi)), 2 * np.mean(beta * np.sin(psi))))
 
 
 class Dashboard(pn.viewable.Viewer):

@@ -91,7 +91,7 @@ def _report(args, sim, t0, extra=None):
     v = sim.verdict()
     h = sim.history
     from ..simulation import COL
-    last = h[h[:, 0] >= h[-1, 0] - 2 * math.pi / max(h[-1, COL["omega_rad_s"]], 1e-3)]
+    from ..verdict import teeter_amplitude_rad
     out = {
         "rotor_speed": v.rotor_speed, "verdict": v.verdict, "outcome": v.outcome, "limit_cycle": v.limit_cycle,
         "growth_rate_per_s": v.growth_rate_per_s, "frequency_hz": v.frequency_hz,
@@ -101,7 +101,7 @@ def _report(args, sim, t0, extra=None):
         "omega_start_rad_s": sim.omega_ref,
         "omega_final_rad_s": float(h[-1, COL["omega_rad_s"]]),
         "descent_rate_final_m_s": float(h[-1, COL["descent_rate_m_s"]]),
-        "teeter_amplitude_rad": float(abs(last[:, COL["teeter_rad"]]).max()),
+        "teeter_amplitude_rad": teeter_amplitude_rad(h),  # first harmonic, last revolution (Table 1)
         "sim_time_s": sim.t, "wall_time_s": wall, "solver_wall_time_s": sim.wall_time_s,
         "run_status": sim.status, "start": sim.start_note, "case_key": case.key(),
         "fidelity": settings.fidelity, "aero": settings.aero,
