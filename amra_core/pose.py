@@ -72,9 +72,10 @@ class ModeAnimation:
 def _eigenpairs(model: CompiledModel, y0: np.ndarray):
     """(exponents, vectors without psi) of the linearisation about ``y0``: Jacobian eigenvalues in axial
     flight, Floquet exponents (principal value) of the monodromy in forward flight."""
+    from .blade_symmetry import eig_axial
     from .stability import jacobian, monodromy  # the stability module's own linearisation
     if model.flight.is_axial:
-        return np.linalg.eig(jacobian(model, y0))
+        return eig_axial(model, jacobian(model, y0))
     omega = float(y0[Y_OMEGA])
     phi, period = monodromy(model, y0, stable_time_step(model, 1.3 * omega))
     z, vecs = np.linalg.eig(phi)

@@ -1,7 +1,8 @@
 """Linearised stability about the trimmed state, and the classification of one map cell.
 
 * Axial flight is time-invariant: the Jacobian ``A = df/dy`` of the full nonlinear model (central
-  differences of the jitted right-hand side) at the trim gives eigenvalues directly.
+  differences of the jitted right-hand side) at the trim gives eigenvalues directly (its collective
+  and cyclic blocks apart, :mod:`amra_core.blade_symmetry`).
 * Forward flight is periodic: the monodromy matrix (the state transition over one revolution,
   central differences of perturbed one-revolution marches of the full nonlinear model) gives
   Floquet multipliers ``z``; exponents ``ln(z)/T``. The frequency of a Floquet exponent is only
@@ -21,6 +22,7 @@ from typing import Optional
 import numpy as np
 
 from . import kernel_guard, kernels
+from .blade_symmetry import eig_axial
 from .flight import FlightCondition, SolverSettings
 from .model import (N_Y_FIXED, Y_OMEGA, Y_V0, Y_VD, Y_ZETA0, Y_ZETAD0, CompiledModel, compile_model,
                     stable_time_step)
@@ -320,7 +322,7 @@ def analyse(model: CompiledModel, trim_result: Optional[TrimResult] = None,
     y0 = tr.state
     omega = float(y0[Y_OMEGA])
     if model.flight.is_axial:
-        lam, vecs = np.linalg.eig(jacobian(m, y0))
+        lam, vecs = eig_axial(m, jacobian(m, y0))  # collective and cyclic blocks apart
         if monodromy_scheme == "krylov":
             keep = _largest(np.exp(np.clip(lam.real, -700.0, 700.0)), KRYLOV_MODES)
             lam, vecs = lam[keep], vecs[:, keep]
