@@ -24,42 +24,45 @@ SPLIT_TOL = 1e-8
 
 def exchange_bases(model) -> tuple[np.ndarray, np.ndarray]:
     """Orthonormal bases (columns) of the collective (``P v = v``) and cyclic (``P v = -v``)
-    subspaces of ``model``'s state without the azimuth (the Jacobian's coordinates)."""
+    subspaces of ``model``'s state without the azimuth (the Jacobian's coordinates). Collective:
+    rotor speed, descent rate, inflow, the blades' lag sums, the model's collective structural
+    modes, the Wagner sums; cyclic: the lag differences, the cyclic structural modes, the Wagner
+    differences and the first-harmonic inflow."""
     n = model.n_y - 1
     nq = int(model.arrays.p[P_NQ])
-    plus, minus = [], []
-
-    def unit(i):
-        e = np.zeros(n)
-        e[i - 1] = 1.0  # state index i, without psi
-        return e
-
-    def pair(i, j):
-        plus.append((unit(i) + unit(j)) / np.sqrt(2.0))
-        minus.append((unit(i) - unit(j)) / np.sqrt(2.0))
-
-    plus.extend(unit(i) for i in (Y_OMEGA, Y_VD, Y_V0))
-    pair(Y_ZETA0, Y_ZETA0 + 1)
-    pair(Y_ZETAD0, Y_ZETAD0 + 1)
+    a, h = model.aero_slice(), model.inflow_harmonics_slice()
+    half = (a.stop - a.start) // 2  # blade 0's Wagner states, then blade 1's
     # physical coordinates [beta, q_blade0, q_blade1] -> [-beta, q_blade1, q_blade0], in the model's basis
     ex = np.zeros((1 + 2 * nq, 1 + 2 * nq))
     ex[0, 0] = -1.0
     ex[1:1 + nq, 1 + nq:] = ex[1 + nq:, 1:1 + nq] = np.eye(nq)
     p_modal = model.phi_pinv @ ex @ model.phi
     w, U = np.linalg.eigh(0.5 * (p_modal + p_modal.T))
-    for sl in (model.x_slice(), model.xd_slice()):
-        for k in range(len(w)):
-            v = np.zeros(n)
-            v[sl.start - 1:sl.stop - 1] = U[:, k]
-            (plus if w[k] > 0 else minus).append(v)
-    a = model.aero_slice()
-    half = (a.stop - a.start) // 2  # blade 0's Wagner states, then blade 1's
-    for i in range(a.start, a.start + half):
-        pair(i, i + half)
-    h = model.inflow_harmonics_slice()
-    minus.extend(unit(i) for i in range(h.start, h.stop))
-    T_plus, T_minus = np.array(plus).T, np.array(minus).T
-    assert N_Y_FIXED - 1 + 2 * model.n_s + (a.stop - a.start) + (h.stop - h.start) == n == T_plus.shape[1] + T_minus.shape[1]
+    up, um = U[:, w > 0], U[:, w <= 0]
+    first = np.array([Y_ZETA0, Y_ZETAD0])  # state indices of pairs (i, i + 1) ...
+    second = first + 1
+    wagner = np.arange(a.start, a.start + half)  # ... and of pairs (i, i + half)
+    firsts = [first, wagner]
+    seconds = [second, wagner + half]
+    pairs_i, pairs_j = np.concatenate(firsts) - 1, np.concatenate(seconds) - 1  # without psi
+    n_pair = len(pairs_i)
+    n_plus = 3 + n_pair + 2 * up.shape[1]
+    T_plus, T_minus = np.zeros((n, n_plus)), np.zeros((n, n - n_plus))
+    T_plus[[Y_OMEGA - 1, Y_VD - 1, Y_V0 - 1], [0, 1, 2]] = 1.0
+    c = 1.0 / np.sqrt(2.0)
+    # column order: singles, the lag pairs, the structural modes (x then x'), the Wagner pairs
+    cols_plus = np.concatenate([3 + np.arange(2), 3 + 2 + 2 * up.shape[1] + np.arange(half)])
+    cols_minus = np.concatenate([np.arange(2), 2 + 2 * um.shape[1] + np.arange(half)])
+    T_plus[pairs_i, cols_plus] = c
+    T_plus[pairs_j, cols_plus] = c
+    T_minus[pairs_i, cols_minus] = c
+    T_minus[pairs_j, cols_minus] = -c
+    for k, sl in enumerate((model.x_slice(), model.xd_slice())):
+        T_plus[sl.start - 1:sl.stop - 1, 5 + k * up.shape[1]:5 + (k + 1) * up.shape[1]] = up
+        T_minus[sl.start - 1:sl.stop - 1, 2 + k * um.shape[1]:2 + (k + 1) * um.shape[1]] = um
+    n_h = h.stop - h.start
+    T_minus[np.arange(h.start, h.stop) - 1, n - n_plus - n_h + np.arange(n_h)] = 1.0
+    assert N_Y_FIXED - 1 + 2 * model.n_s + (a.stop - a.start) + n_h == n
     return T_plus, T_minus
 
 

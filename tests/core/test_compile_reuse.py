@@ -89,3 +89,23 @@ def test_the_jacobian_kernel_equals_column_by_column_differences(fidelity):
         kernel_guard.jacobian(y0[:-1].copy(), m.arrays, np.zeros((n - 2, n - 2)))
     with pytest.raises(kernel_guard.KernelShapeError):
         kernel_guard.jacobian(y0, m.arrays, np.zeros((n - 2, n - 2)))
+
+
+@pytest.mark.parametrize("fidelity", FIDELITIES)
+def test_the_compiled_stiffness_is_the_assembled_one_for_uniform_and_varying_gj(fidelity):
+    """A uniform GJ scales the cached unit torsional stiffness; a GJ varying along the span is
+    integrated. Both give the K0 a fresh assembly gives."""
+    from dataclasses import replace
+    settings = SolverSettings(fidelity=fidelity)
+    uniform = load_preset("paper-boundary").with_overrides(gj_nm2=777.0, x_cg=0.36)
+    gj = np.linspace(1500.0, 300.0, len(uniform.stations.r_m))
+    varying = replace(uniform, stations=replace(uniform.stations, gj_nm2=tuple(gj)))
+    for rotor in (uniform, varying):
+        m = compile_model(rotor, FlightCondition(), settings)
+        mesh = make_mesh(fidelity, rotor.root_cutout_m, rotor.radius_m, settings.n_elements, settings.rigid_spring)
+        whole = assemble(rotor, mesh, added_mass=model_mod.apparent_mass(rotor, FlightCondition().density_kg_m3))
+        np.testing.assert_allclose(m.structure.K0, whole.K0, rtol=0, atol=1e-13 * np.abs(whole.K0).max())
+    # the varying GJ is not mistaken for a uniform one
+    m_u = compile_model(uniform, FlightCondition(), settings)
+    m_v = compile_model(varying, FlightCondition(), settings)
+    assert np.abs(m_u.structure.K0 - m_v.structure.K0).max() > 1e-3 * np.abs(m_u.structure.K0).max()
