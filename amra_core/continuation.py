@@ -90,9 +90,12 @@ def continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[Tr
 def _continue_to(model: CompiledModel, hold, prev: TrimResult, prev2: Optional[TrimResult], s: float) -> TrimResult:
     try:
         if model.flight.is_axial:
-            res = _trim_axial_from(model, predict(prev, prev2, s, model), hold)
+            # the jitted Newton only: where it fails from the predictor the caller halves the step
+            # (scipy's hybr, tried here before, rescued none of 183 failed steps over the rigid,
+            # fem-torsion and fem-coupled axial maps, and cost 8 % of a rigid map)
+            res = _trim_axial_from(model, predict(prev, prev2, s, model), hold, fallback=False)
             if not res.ok and prev2 is not None:
-                res = _trim_axial_from(model, predict(prev, None, 0.0, model), hold)
+                res = _trim_axial_from(model, predict(prev, None, 0.0, model), hold, fallback=False)
             if res.ok and hold is not None:
                 res.model = model.with_controls(hold_omega=True)
             return res
