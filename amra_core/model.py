@@ -149,15 +149,7 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     the model's own."""
     parts = _gj_free_parts(rotor.with_overrides(gj_nm2=1.0), flight, settings, vacuum)
     mesh, s0 = parts.mesh, parts.structure
-    gj = rotor.stations.gj_nm2
-    # the torsional stiffness is linear in GJ: the rigid level's uniform GJ (every slider and map
-    # cell) scales the unit one. The FEM levels integrate it: their Ritz basis comes from an
-    # eigensolver whose vectors inside the two blades' (near-)equal-frequency pairs turn with the
-    # last bit of K0, and a turned basis changes finite-difference Floquet estimates near a
-    # period-doubling split by ~7e-4 (fem-coupled, mu 0.1, CG 0.38, GJ 786); same input, same bits.
-    uniform_rigid = mesh.fidelity == "rigid" and min(gj) == max(gj)
-    k_torsion = gj[0] * parts.torsion_unit if uniform_rigid else torsion_stiffness(rotor, mesh)
-    s = replace(s0, K0=s0.K0 + k_torsion)
+    s = replace(s0, K0=s0.K0 + torsion_stiffness(rotor, mesh))
     R = rotor.radius_m
     zeta = rotor.structural_damping_ratio
     omega_ref = 150.0 / R  #: the reduction's reference rotor speed [rad/s]
@@ -205,7 +197,6 @@ class _GjFreeParts(NamedTuple):
     teeter: np.ndarray
     lag_inv: np.ndarray
     airfoil: object
-    torsion_unit: np.ndarray  #: the torsional stiffness at a uniform GJ of 1 N m^2
 
 
 @functools.lru_cache(maxsize=16)
@@ -262,9 +253,8 @@ def _gj_free_parts(rotor: Rotor, flight: FlightCondition, settings: SolverSettin
     p[P_CLAG] = 2.0 * zeta * np.sqrt(s.k_lag * s.I_lag)  # blade lag mode clamped at the hub
     lag_m = np.array([[s.I_R, s.S_lag, s.S_lag], [s.S_lag, s.I_lag, 0.0], [s.S_lag, 0.0, s.I_lag]])
     af = compile_airfoil(load_airfoil(rotor.airfoil))
-    parts = _GjFreeParts(mesh, s, st, p, shw, shd, sht, tip, teeter, np.linalg.inv(lag_m), af,
-                         torsion_stiffness(rotor, mesh))
-    for a in (st, p, shw, shd, sht, tip, teeter, parts.lag_inv, af.cl, af.cd, af.cm, parts.torsion_unit, *(
+    parts = _GjFreeParts(mesh, s, st, p, shw, shd, sht, tip, teeter, np.linalg.inv(lag_m), af)
+    for a in (st, p, shw, shd, sht, tip, teeter, parts.lag_inv, af.cl, af.cd, af.cm, *(
             v for v in vars(s).values() if isinstance(v, np.ndarray))):
         a.flags.writeable = False  # shared by every model of this rotor: copied, never changed
     return parts

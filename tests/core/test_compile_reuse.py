@@ -93,8 +93,8 @@ def test_the_jacobian_kernel_equals_column_by_column_differences(fidelity):
 
 @pytest.mark.parametrize("fidelity", FIDELITIES)
 def test_the_compiled_stiffness_is_the_assembled_one_for_uniform_and_varying_gj(fidelity):
-    """A uniform GJ scales the cached unit torsional stiffness; a GJ varying along the span is
-    integrated. Both give the K0 a fresh assembly gives."""
+    """The reused GJ-free parts plus the torsional stiffness give the K0 a fresh assembly gives, for a
+    uniform GJ and for one varying along the span."""
     from dataclasses import replace
     settings = SolverSettings(fidelity=fidelity)
     uniform = load_preset("paper-boundary").with_overrides(gj_nm2=777.0, x_cg=0.36)
