@@ -17,15 +17,17 @@ bounds, also at mu 0.1 (``tests/core/test_lawson.py``).
 Forward flight (``accuracy_forward``, mu :data:`FORWARD_ACCURACY_MU`) is measured the same way and
 reported beside the axial figures, with the largest rotor-speed error after the kick
 (:data:`KICK_SPAN_S`) apart. It does not decide the exit code; ``amra bench`` prints a warning when
-it exceeds the bounds. Measured 2026-12-06 (mccutcheon, largest rotor-speed error, all of it in the
-kick's first 50 ms): at mu 0.1 the rigid level's 3 ms step gives 2.1e-4 (4.4e-5 at 2 ms; 7.5e-7
-after the kick), the FEM levels' 2 ms forward cap 6.7e-5 and 8.9e-5; at mu 0.3 every level exceeds
-it (rigid 1.5e-3 at 2.84 ms, fem-torsion 8.4e-4 at 2 ms). What rings is the stiff lag mode, the
-blades' lag against the rotor's inertia (62.9 Hz, damped at 28 1/s; the error's spectrum peaks at
-62.6 Hz, ``tests/core/test_bench.py``), which the forward kick excites and the axial one does not;
-RK4 at 3 ms adds about 5 1/s of numerical damping to it and nothing that matters to the 8.5 Hz lag
-mode. Whether forward runs should take shorter steps (1.5-2 times slower forward runs and maps) is
-an open decision of issue 24."""
+it exceeds the bounds. What rings in the kick is the stiff lag mode, the blades' lag against the
+rotor's inertia (62.9 Hz, damped at 28 1/s; the error's spectrum peaks at 62.6 Hz,
+``tests/core/test_bench.py``), which the forward kick excites and the axial one does not; RK4 at
+3 ms adds about 5 1/s of numerical damping to it and nothing that matters to the 8.5 Hz lag mode.
+Measured 2026-12-06 (mccutcheon, largest rotor-speed error, all of it in the kick's first 50 ms):
+at mu 0.1 the rigid level's 3 ms stable step gave 2.1e-4 (7.5e-7 after the kick), so a kicked run
+in forward flight steps at most :data:`amra_core.model.FORWARD_RUN_CAP_S` (2 ms, as the FEM levels'
+Lawson step already did): rigid 4.3e-5, fem-torsion 6.7e-5, fem-coupled 8.9e-5. At mu 0.3 the
+2 ms step still exceeds the bound (rigid 4.0e-4, fem-torsion 8.4e-4); 1.15 ms meets it at every
+level (4.4e-5, 9.3e-5, 9.4e-5), at 2.6 times the cost of the 3 ms step. Trims and Floquet analyses
+march periodic orbits, not a kick, and keep the stable step."""
 from __future__ import annotations
 
 import json

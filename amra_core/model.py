@@ -391,3 +391,21 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     forward = a.p[P_VH] > 0.0 or not model.flight.is_axial
     cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and forward else 0.003
     return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
+
+
+#: longest step [s] of a kicked run in forward flight with plain RK4 (the rigid level): the kick's
+#: transient reaches the rotor speed through the n/rev inertial coupling, and at the 3 ms cap the
+#: largest error over a kicked run was 2.1e-4 of the rotor speed (rigid, mu 0.1; 8.8e-5 at 2.4 ms,
+#: 4.3e-5 at 2 ms: fourth order), beyond ``amra bench``'s bound of 1e-4. The Lawson step has the
+#: same cap in forward flight already (:data:`LAWSON_FORWARD_CAP_S`).
+FORWARD_RUN_CAP_S = 0.002
+
+
+def run_time_step(model: CompiledModel, omega_rad_s: float) -> float:
+    """The step [s] of a time-marching run (:class:`amra_core.simulation.Simulation`): the stable
+    step, capped at :data:`FORWARD_RUN_CAP_S` in forward flight. Trims and Floquet analyses march a
+    periodic orbit, not a kick (once the kick has died out, a 3 ms run differs from one at 1/8 of
+    the step by 7.5e-7 of the rotor speed), and keep :func:`stable_time_step`."""
+    dt = stable_time_step(model, omega_rad_s)
+    forward = model.arrays.p[P_VH] > 0.0 or not model.flight.is_axial
+    return min(dt, FORWARD_RUN_CAP_S) if forward else dt
