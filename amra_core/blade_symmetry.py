@@ -39,14 +39,11 @@ def exchange_bases(model) -> tuple[np.ndarray, np.ndarray]:
     p_modal = model.phi_pinv @ ex @ model.phi
     w, U = np.linalg.eigh(0.5 * (p_modal + p_modal.T))
     up, um = U[:, w > 0], U[:, w <= 0]
-    first = np.array([Y_ZETA0, Y_ZETAD0])  # state indices of pairs (i, i + 1) ...
-    second = first + 1
-    wagner = np.arange(a.start, a.start + half)  # ... and of pairs (i, i + half)
-    firsts = [first, wagner]
-    seconds = [second, wagner + half]
-    pairs_i, pairs_j = np.concatenate(firsts) - 1, np.concatenate(seconds) - 1  # without psi
-    n_pair = len(pairs_i)
-    n_plus = 3 + n_pair + 2 * up.shape[1]
+    # the pairs (i, j) that trade places: the two blades' lag and lag rate, their Wagner states
+    wagner = np.arange(a.start, a.start + half)
+    pairs_i = np.concatenate([[Y_ZETA0, Y_ZETAD0], wagner]) - 1  # without psi
+    pairs_j = np.concatenate([[Y_ZETA0 + 1, Y_ZETAD0 + 1], wagner + half]) - 1
+    n_plus = 3 + len(pairs_i) + 2 * up.shape[1]
     T_plus, T_minus = np.zeros((n, n_plus)), np.zeros((n, n - n_plus))
     T_plus[[Y_OMEGA - 1, Y_VD - 1, Y_V0 - 1], [0, 1, 2]] = 1.0
     c = 1.0 / np.sqrt(2.0)

@@ -388,8 +388,7 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     c_min = float(a.st[:, S_C].min())
     v_tip = omega_rad_s * model.rotor.radius_m + model.flight.airspeed_m_s + 30.0
     lam_aero = 2.0 * v_tip / c_min * WAGNER_B[1] if model.settings.aero == "theodorsen" else 0.0
-    forward = a.p[P_VH] > 0.0 or not model.flight.is_axial
-    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and forward else 0.003
+    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and _forward(model) else 0.003
     return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
 
 
@@ -407,5 +406,9 @@ def run_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     periodic orbit, not a kick (once the kick has died out, a 3 ms run differs from one at 1/8 of
     the step by 7.5e-7 of the rotor speed), and keep :func:`stable_time_step`."""
     dt = stable_time_step(model, omega_rad_s)
-    forward = model.arrays.p[P_VH] > 0.0 or not model.flight.is_axial
-    return min(dt, FORWARD_RUN_CAP_S) if forward else dt
+    return min(dt, FORWARD_RUN_CAP_S) if _forward(model) else dt
+
+
+def _forward(model: CompiledModel) -> bool:
+    """True in forward flight: an airspeed in the arrays (a live change) or in the flight condition."""
+    return model.arrays.p[P_VH] > 0.0 or not model.flight.is_axial

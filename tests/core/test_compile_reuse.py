@@ -105,7 +105,3 @@ def test_the_compiled_stiffness_is_the_assembled_one_for_uniform_and_varying_gj(
         mesh = make_mesh(fidelity, rotor.root_cutout_m, rotor.radius_m, settings.n_elements, settings.rigid_spring)
         whole = assemble(rotor, mesh, added_mass=model_mod.apparent_mass(rotor, FlightCondition().density_kg_m3))
         np.testing.assert_allclose(m.structure.K0, whole.K0, rtol=0, atol=1e-13 * np.abs(whole.K0).max())
-    # the varying GJ is not mistaken for a uniform one
-    m_u = compile_model(uniform, FlightCondition(), settings)
-    m_v = compile_model(varying, FlightCondition(), settings)
-    assert np.abs(m_u.structure.K0 - m_v.structure.K0).max() > 1e-3 * np.abs(m_u.structure.K0).max()
