@@ -20,6 +20,14 @@ for the whole state (azimuth advanced by one revolution). ``Phi_s`` is reused wh
 change (a chord Newton: the projection's own error shrinks with each step the trim takes); the
 callers form it again when their iteration stalls with it (:func:`amra_core.equilibrium.trim_forward`,
 :class:`amra_core.periodic_trim.PeriodicContinuation`).
+
+A matrix reused at another GJ is first written in that model's structural coordinates. At the FEM
+levels they are modal, and the modes come from an eigensolver: from one GJ to the next a mode may
+change sign, and the two blades' equal-frequency pairs turn within their plane. A matrix used in the
+wrong coordinates threw the projection off by an order of magnitude at once (fem-torsion, mu 0.5:
+periodicity gaps of 5-30 from a neighbour's trim, against 0.01-0.1 when the modes kept their
+signs), the Newton step failed, and a continuation that halved such steps reported a trim branch
+ending at mean GJ 2041 N m^2/rad where it goes on to the blade's own 1478.
 """
 from __future__ import annotations
 
@@ -67,6 +75,7 @@ class PeriodicShooting:
         self.phi_s = None  #: (n_y, n_slow) one-revolution transition columns of the slow states
         self.lu = None  #: I - Phi_ss, factored
         self.idx = None
+        self.basis = None  #: the structural basis (``CompiledModel.phi``) the matrix is written in
         self.revolutions = 0
         self.builds = 0
 
@@ -79,8 +88,26 @@ class PeriodicShooting:
     def copy(self) -> "PeriodicShooting":
         """The same matrix, with its own counters (the matrix itself is never changed in place)."""
         out = PeriodicShooting()
-        out.phi_s, out.lu, out.idx = self.phi_s, self.lu, self.idx
+        out.phi_s, out.lu, out.idx, out.basis = self.phi_s, self.lu, self.idx, self.basis
         return out
+
+    def _in_basis_of(self, model: CompiledModel) -> None:
+        """Write the matrix in ``model``'s structural coordinates (module docstring): with ``T`` the
+        map from the old coordinates to the new ones (``phi_pinv_new @ phi_old``, both states' physical
+        FEM coordinates alike) and ``S`` the state map (``T`` on the coordinates and on their rates,
+        identity elsewhere), the matrix becomes ``S Phi_s S_ss^-1``. New arrays: copies sharing
+        the old ones keep them."""
+        import scipy.linalg as sla
+        if model.phi is self.basis or np.array_equal(model.phi, self.basis):
+            return
+        t = model.phi_pinv @ self.basis
+        s = np.eye(model.n_y)
+        s[model.x_slice(), model.x_slice()] = t
+        s[model.xd_slice(), model.xd_slice()] = t
+        s_ss = s[np.ix_(self.idx, self.idx)]
+        self.phi_s = np.linalg.solve(s_ss.T, (s @ self.phi_s).T).T
+        self.lu = sla.lu_factor(np.eye(len(self.idx)) - self.phi_s[self.idx])
+        self.basis = model.phi
 
     def build(self, model: CompiledModel, y: np.ndarray, dt: float) -> int:
         """Form the slow columns of the one-revolution transition matrix at ``y``; returns the
@@ -95,7 +122,7 @@ class PeriodicShooting:
             phi[:, j] = (one_rev(model, yp, dt) - base) / h
         self.revolutions += len(idx) + 1
         self.builds += 1
-        self.idx, self.phi_s = idx, phi
+        self.idx, self.phi_s, self.basis = idx, phi, model.phi
         self.lu = sla.lu_factor(np.eye(len(idx)) - phi[idx])
         return len(idx) + 1
 
@@ -103,6 +130,7 @@ class PeriodicShooting:
         """One Newton step towards the periodic orbit from ``y`` (one revolution marched); returns
         (the new state, the periodicity error it started from: max |P_s(y) - y_s|)."""
         import scipy.linalg as sla
+        self._in_basis_of(model)
         p = one_rev(model, y, dt)
         self.revolutions += 1
         gap = p[self.idx] - y[self.idx]
