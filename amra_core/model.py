@@ -12,6 +12,7 @@ wagner(2 blades x n_st x 2)]`` with ``x = [beta, q_blade0, q_blade1]`` (:mod:`am
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass, replace
 from typing import NamedTuple
 
@@ -392,21 +393,43 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
 
 
-#: longest step [s] of a kicked run in forward flight with plain RK4 (the rigid level): the kick's
-#: transient reaches the rotor speed through the n/rev inertial coupling, and at the 3 ms cap the
-#: largest error over a kicked run was 2.1e-4 of the rotor speed (rigid, mu 0.1; 8.8e-5 at 2.4 ms,
-#: 4.3e-5 at 2 ms: fourth order), beyond ``amra bench``'s bound of 1e-4. The Lawson step has the
-#: same cap in forward flight already (:data:`LAWSON_FORWARD_CAP_S`).
+#: longest step [s] of a kicked run in forward flight with plain RK4 (the rigid level) up to
+#: :data:`FORWARD_RUN_CAP_MU`: the kick's transient reaches the rotor speed through the n/rev inertial
+#: coupling, and at the 3 ms cap the largest error over a kicked run was 2.1e-4 of the rotor speed
+#: (rigid, mu 0.1; 8.8e-5 at 2.4 ms, 4.3e-5 at 2 ms: fourth order), beyond ``amra bench``'s bound
+#: of 1e-4. The Lawson step has the same cap in forward flight already (:data:`LAWSON_FORWARD_CAP_S`).
 FORWARD_RUN_CAP_S = 0.002
+#: advance ratio up to which :data:`FORWARD_RUN_CAP_S` holds; above it the cap shrinks as
+#: ``1/sqrt(mu)`` (:func:`forward_run_cap_s`)
+FORWARD_RUN_CAP_MU = 0.1
 
 
-def run_time_step(model: CompiledModel, omega_rad_s: float) -> float:
+def forward_run_cap_s(mu: float) -> float:
+    """Longest step [s] of a kicked run at advance ratio ``mu``: :data:`FORWARD_RUN_CAP_S` up to
+    :data:`FORWARD_RUN_CAP_MU`, then ``FORWARD_RUN_CAP_S * sqrt(0.1 / mu)``. The kick's largest
+    rotor-speed error grows as ``mu^2 dt^4`` (McCutcheon, at 2 ms: rigid 4.3e-5 at mu 0.1 and 4.0e-4
+    at mu 0.3; fem-torsion 6.7e-5 and 8.4e-4; fem-coupled 8.9e-5 and 8.6e-4 of the rotor speed), so
+    this cap keeps it where it is at mu 0.1: at mu 0.3 (1.15 ms) rigid 4.4e-5, fem-torsion 9.3e-5,
+    fem-coupled 9.4e-5, within ``amra bench``'s bound of 1e-4 (``tests/core/test_bench.py``)."""
+    return FORWARD_RUN_CAP_S * math.sqrt(FORWARD_RUN_CAP_MU / max(float(mu), FORWARD_RUN_CAP_MU))
+
+
+def advance_ratio(model: CompiledModel, omega_rad_s: float) -> float:
+    """The advance ratio [-] of ``model`` at rotor speed ``omega_rad_s``: the flight condition's own,
+    else the airspeed in the arrays over the tip speed (0 in axial flight)."""
+    if model.flight.mu is not None:
+        return float(model.flight.mu)
+    return float(model.arrays.p[P_VH]) / max(omega_rad_s * model.rotor.radius_m, 1e-9)
+
+
+def run_time_step(model: CompiledModel, omega_rad_s: float, mu: float = 0.0) -> float:
     """The step [s] of a time-marching run (:class:`amra_core.simulation.Simulation`): the stable
-    step, capped at :data:`FORWARD_RUN_CAP_S` in forward flight. Trims and Floquet analyses march a
-    periodic orbit, not a kick (once the kick has died out, a 3 ms run differs from one at 1/8 of
-    the step by 7.5e-7 of the rotor speed), and keep :func:`stable_time_step`."""
+    step, capped in forward flight at :func:`forward_run_cap_s` of the run's advance ratio ``mu``.
+    Trims and Floquet analyses march a periodic orbit, not a kick (once the kick has died out, a
+    3 ms run differs from one at 1/8 of the step by 7.5e-7 of the rotor speed), and keep
+    :func:`stable_time_step`."""
     dt = stable_time_step(model, omega_rad_s)
-    return min(dt, FORWARD_RUN_CAP_S) if _forward(model) else dt
+    return min(dt, forward_run_cap_s(mu)) if _forward(model) else dt
 
 
 def _forward(model: CompiledModel) -> bool:

@@ -22,7 +22,7 @@ import numpy as np
 
 from . import __version__, kernel_guard, kernels
 from .flight import FlightCondition, SettingsError, SolverSettings, _num
-from .model import N_Y_FIXED, Y_OMEGA, CompiledModel, compile_model, run_time_step, transfer_state
+from .model import N_Y_FIXED, Y_OMEGA, CompiledModel, advance_ratio, compile_model, run_time_step, transfer_state
 from .rotor import Rotor
 from .trim import TrimResult, trim
 from .verdict import Verdict, judge, judge_after_change
@@ -130,7 +130,9 @@ class Simulation:
         self.reference_row = self._row(self.y)
         self._apply_perturbation(case.perturbation)
         self.t = 0.0
-        self.dt = case.settings.dt_s or run_time_step(self.model, 1.3 * self.omega_ref)
+        #: advance ratio of the run [-] (its forward step is capped by it: model.forward_run_cap_s)
+        self.mu = advance_ratio(self.model, self.omega_ref)
+        self.dt = case.settings.dt_s or run_time_step(self.model, 1.3 * self.omega_ref, self.mu)
         self.record_every = max(1, int(round(RECORD_INTERVAL_S / self.dt)))
         #: history sampling interval [s] of this run, kept when a parameter change alters the step
         self.record_interval_s = self.dt * self.record_every
@@ -248,7 +250,7 @@ class Simulation:
         recording interval."""
         if self.case.settings.dt_s:
             return self.dt, self.record_every
-        dt_stable = run_time_step(model, 1.3 * max(self.omega_ref, abs(float(y[Y_OMEGA]))))
+        dt_stable = run_time_step(model, 1.3 * max(self.omega_ref, abs(float(y[Y_OMEGA]))), self.mu)
         every = max(1, int(math.ceil(self.record_interval_s / dt_stable - 1e-9)))
         return self.record_interval_s / every, every
 

@@ -111,3 +111,20 @@ def test_forward_accuracy_is_reported_and_warned_about(monkeypatch, capsys):
     assert bench_cli.cmd_bench(Args()) == 0
     err = capsys.readouterr().err
     assert "warning" in err and "forward flight (mu 0.1)" in err and "rigid" in err and "0.00021" in err
+
+
+@pytest.mark.parametrize("fidelity", ["rigid", "fem-torsion"])
+def test_faster_forward_flight_steps_shorter_and_keeps_the_bound(fidelity):
+    """At mu 0.3 the kick's rotor-speed error at the mu 0.1 cap (2 ms) is about nine times the mu 0.1
+    one and over the bound (measured rigid 4.0e-4, fem-torsion 8.4e-4), so the run's step shrinks as
+    1/sqrt(mu) (model.forward_run_cap_s: 1.15 ms), which brings it back within the bound (4.4e-5,
+    9.3e-5)."""
+    from amra_core.flight import FlightCondition
+    from amra_core.model import FORWARD_RUN_CAP_S, forward_run_cap_s
+    fl = FlightCondition(mu=bench.FAST_FORWARD_ACCURACY_MU)
+    default = bench._accuracy(fidelity, flight=fl)
+    assert default["dt_s"] == pytest.approx(forward_run_cap_s(0.3)) and default["dt_s"] == pytest.approx(1.1547e-3, rel=1e-4)
+    assert default["within_bounds"]
+    at_mu_01_cap = bench._accuracy(fidelity, step_factor=FORWARD_RUN_CAP_S / default["dt_s"], flight=fl)
+    assert at_mu_01_cap["max_omega_relative_error"] > bench.OMEGA_RELATIVE_ERROR_BOUND
+    assert forward_run_cap_s(0.05) == forward_run_cap_s(0.1) == FORWARD_RUN_CAP_S
