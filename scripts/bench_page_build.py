@@ -1,6 +1,8 @@
 """Server time to build one dashboard page, in this process and without a browser (a benchmark, not
 a test): the session's :class:`app.app.Dashboard`, its layout and the Bokeh document of the page with
-its first tab (the boundary map; outside a server Panel builds the deferred tabs area at once).
+its first tab (the boundary map; outside a server Panel builds the deferred tabs area at once),
+built with the page's document current (``set_curdoc``), as Panel's server builds a session: Panel
+then makes one stylesheet model per CSS file and document, not one per component.
 
 The served figure leaves the deferred tabs out and varies by +/- 40 ms from page to page with the
 server's garbage collections; this one, averaged over many pages in a quiet process, shows what a
@@ -46,6 +48,7 @@ def main(argv=None) -> int:
     import holoviews as hv
     import panel as pn
     from bokeh.document import Document
+    from panel.io.state import set_curdoc
 
     from app.app import Dashboard
     from app.server.map_jobs import get_registry
@@ -61,7 +64,7 @@ def main(argv=None) -> int:
     for _ in range(args.pages + 3):  # the first three warm the caches
         doc = Document()
         t0 = time.perf_counter()
-        with pn.io.hold(freeze=True):
+        with set_curdoc(doc), pn.io.hold(freeze=True):  # as a served session: Panel shares stylesheets per document
             dash = Dashboard(settings, registry=registry, pool=_NoPool(), doc=doc)
             dash.__panel__().server_doc(doc)
         times.append(time.perf_counter() - t0)
