@@ -230,7 +230,10 @@ def _blade_torsion_stiffness(rotor: Rotor, mesh: BladeMesh, r, wq, dPt) -> np.nd
 
 
 def blade_torsion_stiffness(rotor: Rotor, mesh: BladeMesh) -> np.ndarray:
-    """One blade's torsional stiffness over ``[beta, q]`` [N m/rad per coordinate]."""
+    """One blade's torsional stiffness over ``[beta, q]`` [N m/rad per coordinate]. The rigid
+    level's root spring needs no quadrature (a map compiles a model per GJ it visits)."""
+    if mesh.fidelity == "rigid":
+        return _blade_torsion_stiffness(rotor, mesh, None, None, None)
     r, wq = quadrature(rotor, mesh)
     _, _, _, _, dPt = _blade_shapes(mesh, r)
     return _blade_torsion_stiffness(rotor, mesh, r, wq, dPt)
