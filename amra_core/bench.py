@@ -25,14 +25,14 @@ to the 8.5 Hz lag mode. Measured 2026-12-06 (mccutcheon, largest rotor-speed err
 kick's first 50 ms): at mu 0.1 the rigid level's 3 ms stable step gave 2.1e-4 (7.5e-7 after the
 kick), so a kicked run in forward flight steps at most :data:`amra_core.model.FORWARD_RUN_CAP_S`
 (2 ms, as the FEM levels' Lawson step already did): rigid 4.3e-5, fem-torsion 6.7e-5, fem-coupled
-8.9e-5. The error grows about as mu^2 (9-13 times from mu 0.1 to 0.3): at mu 0.3 the 2 ms step gave rigid 4.0e-4, fem-torsion 8.4e-4,
-fem-coupled 8.6e-4, so above mu 0.1 the cap shrinks as 1/sqrt(mu)
-(:func:`amra_core.model.forward_run_cap_s`: 1.15 ms at mu 0.3, where it gives 4.4e-5, 9.3e-5 and
-9.4e-5). At mu 0.5 no step meets the bounds: the McCutcheon runs there part from their reference
-by 6-37 % of the rotor speed after the kick, at 2 ms and at 0.89 ms alike, so a smaller step does
-not bring them together: the motion there does not settle back after the kick (issue 24's closing
-note of 2026-12-06). Trims and Floquet analyses march periodic orbits, not a kick, and keep the
-stable step."""
+8.9e-5. The error grows about as mu^2 (9-13 times from mu 0.1 to 0.3): at mu 0.3 the 2 ms step
+gave rigid 4.0e-4, fem-torsion 8.4e-4, fem-coupled 8.6e-4, so above mu 0.1 the cap shrinks as
+1/sqrt(mu) (:func:`amra_core.model.forward_run_cap_s`: 1.15 ms at mu 0.3, where it gives 4.4e-5,
+9.3e-5 and 9.4e-5). At mu 0.5 no step meets the bounds: the McCutcheon runs there part from their
+reference by 6-37 % of the rotor speed after the kick, at 2 ms and at 0.89 ms alike. Their trimmed
+orbit is unstable (largest Floquet multipliers per revolution: rigid 1.76, fem-torsion 3.19,
+fem-coupled 3.40), so any difference grows, whatever the step. Trims and Floquet analyses march
+periodic orbits, not a kick, and keep the stable step."""
 from __future__ import annotations
 
 import json

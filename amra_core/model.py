@@ -407,7 +407,7 @@ FORWARD_RUN_CAP_MU = 0.1
 def forward_run_cap_s(mu: float) -> float:
     """Longest step [s] of a kicked run at advance ratio ``mu``: :data:`FORWARD_RUN_CAP_S` up to
     :data:`FORWARD_RUN_CAP_MU`, then ``FORWARD_RUN_CAP_S * sqrt(0.1 / mu)``. The kick's largest
-    rotor-speed error grows as ``mu^2 dt^4`` (McCutcheon, at 2 ms: rigid 4.3e-5 at mu 0.1 and 4.0e-4
+    rotor-speed error grows about as ``mu^2 dt^4`` (McCutcheon, at 2 ms: rigid 4.3e-5 at mu 0.1 and 4.0e-4
     at mu 0.3; fem-torsion 6.7e-5 and 8.4e-4; fem-coupled 8.9e-5 and 8.6e-4 of the rotor speed), so
     this cap keeps it where it is at mu 0.1: at mu 0.3 (1.15 ms) rigid 4.4e-5, fem-torsion 9.3e-5,
     fem-coupled 9.4e-5, within ``amra bench``'s bound of 1e-4 (``tests/core/test_bench.py``)."""

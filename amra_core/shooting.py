@@ -23,11 +23,14 @@ callers form it again when their iteration stalls with it (:func:`amra_core.equi
 
 A matrix reused at another GJ is first written in that model's structural coordinates. At the FEM
 levels they are modal, and the modes come from an eigensolver: from one GJ to the next a mode may
-change sign, and the two blades' equal-frequency pairs turn within their plane. A matrix used in the
-wrong coordinates threw the projection off by an order of magnitude at once (fem-torsion, mu 0.5:
-periodicity gaps of 5-30 from a neighbour's trim, against 0.01-0.1 when the modes kept their
-signs), the Newton step failed, and a continuation that halved such steps reported a trim branch
-ending at mean GJ 2041 N m^2/rad where it goes on to the blade's own 1478.
+change sign, and the two blades' nearly equal-frequency pairs turn within their plane. Used in the
+wrong coordinates, the matrix threw the projection off (fem-torsion, McCutcheon, mu 0.5: the trim's
+continuation in GJ ended its branch anywhere from mean GJ 2041 to 2989 N m^2/rad for seven GJ
+values within 1 % of the blade's own 1478; in the right coordinates, 2097-2175, and at 1478 itself
+it trims, at 35.90 rad/s, as continuation in advance ratio at that GJ does). What still stops the
+continuation there: below GJ 3,000-4,000 that periodic orbit is unstable (Floquet multipliers -2.6
+to -3.8 per revolution), and the revolution marched after one projection amplifies what is left
+of the periodicity gap.
 """
 from __future__ import annotations
 

@@ -123,7 +123,8 @@ def test_faster_forward_flight_steps_shorter_and_keeps_the_bound(fidelity):
     from amra_core.model import FORWARD_RUN_CAP_S, forward_run_cap_s
     fl = FlightCondition(mu=bench.FAST_FORWARD_ACCURACY_MU)
     default = bench._accuracy(fidelity, flight=fl)
-    assert default["dt_s"] == pytest.approx(forward_run_cap_s(0.3)) and default["dt_s"] == pytest.approx(1.1547e-3, rel=1e-4)
+    assert default["dt_s"] == pytest.approx(forward_run_cap_s(0.3))
+    assert default["dt_s"] == pytest.approx(1.1547e-3, rel=1e-4)
     assert default["within_bounds"]
     at_mu_01_cap = bench._accuracy(fidelity, step_factor=FORWARD_RUN_CAP_S / default["dt_s"], flight=fl)
     assert at_mu_01_cap["max_omega_relative_error"] > bench.OMEGA_RELATIVE_ERROR_BOUND
