@@ -134,11 +134,18 @@ def cmd_boundary(args) -> int:
     run = iter_map(spec, executor=executor, store=store, cancel=cancel)
     interrupted = None
     old_term = None
+    looping = False  #: True while waiting for the map's cells: only there does SIGTERM raise
 
     def on_term(signum, frame):
+        nonlocal interrupted
         signal.signal(signal.SIGTERM, signal.SIG_IGN)  # one is enough: the map is being stopped
         cancel.set()
-        raise _Stop()
+        if looping:
+            raise _Stop()  # out of the wait for the next cell
+        # before the first cell or after the last (the map assembled, the pool closing): the map
+        # stops, or has finished, by itself; an exception here would skip the report and the
+        # clean exit (a map that finished while its SIGTERM was on the way ended "interrupted", 130)
+        interrupted = "SIGTERM"
 
     try:
         old_term = signal.signal(signal.SIGTERM, on_term)
@@ -149,6 +156,7 @@ def cmd_boundary(args) -> int:
             warnings.simplefilter("always")
             warnings.showwarning = lambda m, *a, **k: _warn(str(m))
             try:
+                looping = True
                 for cell in run:
                     if tty:
                         total = max(run.estimated_total, run.done)
@@ -156,7 +164,9 @@ def cmd_boundary(args) -> int:
                         sys.stderr.write(f"\r[{'#' * k}{'.' * (30 - k)}] {run.done} cells ({run.cached} from store), "
                                          f"CG {cell.cg:.3f} GJ {cell.gj_nm2:8.1f}: {cell.verdict:15s}")
                         sys.stderr.flush()
+                looping = False
             except KeyboardInterrupt as exc:
+                looping = False
                 cancel.set()
                 interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
                 run.cancelled = True

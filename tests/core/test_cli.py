@@ -259,3 +259,41 @@ def test_stability_human_readable(capsys):
     assert rc == 0
     assert out.startswith("stable: True")
     assert "f [Hz]" in out and "zeta [-]" in out
+
+
+def test_sigterm_after_the_last_cell_still_ends_in_the_report_and_143(capsys, monkeypatch, tmp_path):
+    """A SIGTERM that arrives once every cell is in (the map assembled, the pool closing: on a fast
+    machine a small map is there when the signal comes) is reported as one during the map, with the
+    store's count and exit 143, not as an unhandled interrupt (exit 130, no report, as it was)."""
+    import os
+    import signal
+
+    from amra_core import executor as executor_module
+    real = executor_module.make_executor
+
+    class ClosingWithSigterm:
+        def __init__(self, inner):
+            self.inner = inner
+
+        def __getattr__(self, name):
+            return getattr(self.inner, name)
+
+        def close(self):
+            # never SIGTERM the test runner itself: only with the command's own handler in place
+            assert signal.getsignal(signal.SIGTERM) not in (signal.SIG_DFL, signal.SIG_IGN, before)
+            os.kill(os.getpid(), signal.SIGTERM)  # delivered here, in the main thread, after the loop
+            self.inner.close()
+
+    before = signal.getsignal(signal.SIGTERM)
+    monkeypatch.setattr(executor_module, "make_executor", lambda **kw: ClosingWithSigterm(real(**kw)))
+    store = tmp_path / "s.db"
+    rc = main(["boundary", "--preset", "paper-boundary", "--fidelity", "rigid", "--mu", "0", "--cg", "0.40:0.40:1",
+               "--coarse", "3", "--tol", "0.2", "--gj", "100:1500", "--workers", "1", "--store", str(store),
+               "--json", "--quiet"])
+    out, err = capsys.readouterr()
+    assert rc == 143
+    assert "interrupted (SIGTERM)" in err and "rerun with the same --store" in err and "Traceback" not in err
+    d = json.loads(out)
+    assert d["cases"] >= 3 and not d["cancelled"]  # every cell was in: the map itself is complete
+    assert f"holds {d['cases']} cells" in err
+    assert signal.getsignal(signal.SIGTERM) == before  # the command's handler is gone again
