@@ -393,11 +393,12 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
 
 
-#: longest step [s] of a kicked run in forward flight with plain RK4 (the rigid level) up to
-#: :data:`FORWARD_RUN_CAP_MU`: the kick's transient reaches the rotor speed through the n/rev inertial
-#: coupling, and at the 3 ms cap the largest error over a kicked run was 2.1e-4 of the rotor speed
-#: (rigid, mu 0.1; 8.8e-5 at 2.4 ms, 4.3e-5 at 2 ms: fourth order), beyond ``amra bench``'s bound
-#: of 1e-4. The Lawson step has the same cap in forward flight already (:data:`LAWSON_FORWARD_CAP_S`).
+#: longest step [s] of a kicked run in forward flight, at every level, up to :data:`FORWARD_RUN_CAP_MU`:
+#: the kick's transient reaches the rotor speed through the n/rev inertial coupling, and at the rigid
+#: level's (plain RK4) 3 ms cap the largest error over a kicked run was 2.1e-4 of the rotor speed
+#: (mu 0.1; 8.8e-5 at 2.4 ms, 4.3e-5 at 2 ms: fourth order), beyond ``amra bench``'s bound of 1e-4.
+#: The FEM levels' Lawson step has the same cap in forward flight, trims included
+#: (:data:`LAWSON_FORWARD_CAP_S`).
 FORWARD_RUN_CAP_S = 0.002
 #: advance ratio up to which :data:`FORWARD_RUN_CAP_S` holds; above it the cap shrinks as
 #: ``1/sqrt(mu)`` (:func:`forward_run_cap_s`)
