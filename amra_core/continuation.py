@@ -13,19 +13,9 @@ from typing import Optional
 
 import numpy as np
 
-from .equilibrium import TrimResult, _hover_induced, _plausible, _solve_at, _trim_axial_from
+from .equilibrium import (STEP_OMEGA_REL, STEP_SPEED_VH, STEP_TWIST_RAD, TrimResult, _hover_induced,  # noqa: F401
+                          _plausible, _solve_at, _trim_axial_from, on_branch)
 from .model import CompiledModel, Y_OMEGA, Y_PSI, compile_model, transfer_state
-
-
-#: largest change, beyond the secant prediction, that a continuation step may show: rotor speed
-#: [fraction], descent rate and inflow [fraction of v_h], tip twist [rad]
-STEP_OMEGA_REL = 0.05
-STEP_SPEED_VH = 0.15
-STEP_TWIST_RAD = 0.02
-
-
-def _trim_scalars(res: TrimResult) -> np.ndarray:
-    return np.array([res.omega_rad_s, res.descent_rate_m_s, res.inflow_m_s, res.tip_twist_rad])
 
 
 def predict(prev: TrimResult, prev2: Optional[TrimResult], s: float, target: CompiledModel) -> np.ndarray:
@@ -52,22 +42,6 @@ def _forward_prediction(prev: TrimResult, prev2: TrimResult, s: float, target: C
                    omega_rad_s=ahead(prev.omega_rad_s, prev2.omega_rad_s),
                    descent_rate_m_s=ahead(prev.descent_rate_m_s, prev2.descent_rate_m_s),
                    disk_tilt_rad=ahead(prev.disk_tilt_rad, prev2.disk_tilt_rad))
-
-
-def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
-    """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
-    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
-    the secant prediction. A False here means: halve the step (or a fold). The branch may move
-    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
-    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
-    if not _plausible(res, None):
-        return False
-    vh = _hover_induced(res.model)
-    x1 = _trim_scalars(prev)
-    pred = x1 if prev2 is None else x1 + s * (x1 - _trim_scalars(prev2))
-    d = np.abs(_trim_scalars(res) - pred)
-    return bool(d[0] <= STEP_OMEGA_REL * prev.omega_rad_s and d[1] <= STEP_SPEED_VH * vh
-                and d[2] <= STEP_SPEED_VH * vh and d[3] <= STEP_TWIST_RAD)
 
 
 def mark_continued(res: TrimResult, prev: TrimResult) -> TrimResult:

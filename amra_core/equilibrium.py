@@ -341,11 +341,13 @@ def _tilt_bracket(model: CompiledModel, y0: np.ndarray, omega: float, airspeed_m
 
 
 def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold: Optional[float] = None,
-                 guess: Optional[TrimResult] = None, mu: Optional[float] = None) -> TrimResult:
+                 guess: Optional[TrimResult] = None, mu: Optional[float] = None, settle: bool = False) -> TrimResult:
     """Periodic trim in forward flight at horizontal airspeed ``airspeed_m_s`` [m/s], or, with
     ``mu`` given (and ``airspeed_m_s`` None), at the advance ratio ``mu``: the airspeed then follows
     the unknowns, ``V = mu Omega R / cos(tilt)``, inside the one Newton iteration (a fixed point
-    on the airspeed around whole trims cost two to three trims per advance ratio)."""
+    on the airspeed around whole trims cost two to three trims per advance ratio). ``settle``: every
+    trial's blade motion is shot all the way onto its periodic orbit (:attr:`PeriodicShooting.settle`),
+    the fallback of :func:`trim_forward_continued` for a step that failed without it."""
     H = {c: i for i, c in enumerate(kernels.HISTORY_COLUMNS)}
     weight = model.rotor.vehicle_mass_kg * model.flight.gravity_m_s2
     base = trim_axial(model) if guess is None else guess
@@ -370,6 +372,7 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
     # iteration stalls with it; a cold start marches until it stalls near the trim
     inherited = guess is not None and guess.shooting is not None and guess.shooting.fits(model)
     shooting = guess.shooting.copy() if inherited else PeriodicShooting()
+    shooting.settle = settle
 
     def evaluate(z, n_revs):
         nonlocal y
@@ -478,13 +481,13 @@ def _solve_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimRe
     return _solve_forward_at(model, hold, guess)
 
 
-def _solve_forward_at(model: CompiledModel, hold, guess: Optional[TrimResult]) -> TrimResult:
+def _solve_forward_at(model: CompiledModel, hold, guess: Optional[TrimResult], settle: bool = False) -> TrimResult:
     """Forward-flight trim at the model's airspeed or advance ratio from ``guess`` (cold start from
     the axial trim when None: converges only at low speed, see :func:`trim_forward_continued`)."""
     fl = model.flight
     if fl.mu is None:
-        return trim_forward(model, fl.airspeed_m_s, hold, guess)
-    return trim_forward(model, None, hold, guess, mu=fl.mu)
+        return trim_forward(model, fl.airspeed_m_s, hold, guess, settle=settle)
+    return trim_forward(model, None, hold, guess, mu=fl.mu, settle=settle)
 
 
 #: forward trims are cold-started (from the axial trim, shaft tilt 8 deg, half the axial descent
@@ -521,12 +524,22 @@ def trim_forward_continued(model: CompiledModel) -> TrimResult:
         f = _replace(fl, mu=s) if by_mu else _replace(fl, airspeed_m_s=s)
         return _replace(model, flight=f)
 
-    def solve(s, guess) -> Optional[TrimResult]:
+    def solve(s, guess, prev2=None, ratio=1.0, settle=False) -> Optional[TrimResult]:
+        """The trim at speed ``s`` from ``guess``: None unless it continues the branch through
+        ``guess`` and ``prev2`` (:func:`on_branch`, the secant over the last two speeds, ``ratio``
+        the new step over the last one)."""
         try:
-            res = _solve_forward_at(model_at(s), None, guess)
+            res = _solve_forward_at(model_at(s), None, guess, settle)
         except FloatingPointError as exc:
             res = TrimResult("no-autorotation", reason=str(exc), model=model_at(s))
-        return res if res.ok and _plausible(res, guess) else None
+        if guess is None:
+            return res if _plausible(res, None) else None
+        if not on_branch(res, guess, prev2, ratio):
+            # a step that failed is tried again with every trial shot all the way onto its orbit:
+            # near mu 0.5 the orbit is unstable (multipliers -1.8 to -3.4 per revolution), and one
+            # chord Newton step leaves a gap that the averaging revolution amplifies
+            return None if settle else solve(s, guess, prev2, ratio, True)
+        return res
 
     prev, s_prev = None, None
     for s0 in sorted({min(target, mu0 * scale) for mu0 in FORWARD_COLD_START_MU}, reverse=True):
@@ -539,11 +552,13 @@ def trim_forward_continued(model: CompiledModel) -> TrimResult:
                           reason=f"no forward-flight trim even at mu <= {FORWARD_COLD_START_MU[0]:g} "
                                  f"(cold starts from the axial trim did not converge)")
     step = FORWARD_STEP_MU * scale
+    prev2, s_prev2 = None, None
     while s_prev < target - 1e-12:
         s = min(target, s_prev + step)
-        res = solve(s, prev)
-        if res is not None and res.ok:
-            prev, s_prev = res, s
+        ratio = (s - s_prev) / (s_prev - s_prev2) if prev2 is not None else 0.0
+        res = solve(s, prev, prev2, ratio)
+        if res is not None:
+            prev2, s_prev2, prev, s_prev = prev, s_prev, res, s
             step = min(FORWARD_STEP_MU * scale, 1.5 * step)
             continue
         step *= 0.5
@@ -580,6 +595,33 @@ def _plausible(res: TrimResult, prev: Optional[TrimResult]) -> bool:
     if prev is not None and abs(res.omega_rad_s - prev.omega_rad_s) > 0.25 * prev.omega_rad_s:
         return False
     return True
+
+
+#: largest change, beyond the secant prediction, that a continuation step may show: rotor speed
+#: [fraction], descent rate and inflow [fraction of v_h], tip twist [rad]
+STEP_OMEGA_REL = 0.05
+STEP_SPEED_VH = 0.15
+STEP_TWIST_RAD = 0.02
+
+
+def _trim_scalars(res: TrimResult) -> np.ndarray:
+    return np.array([res.omega_rad_s, res.descent_rate_m_s, res.inflow_m_s, res.tip_twist_rad])
+
+
+def on_branch(res: TrimResult, prev: TrimResult, prev2: Optional[TrimResult] = None, s: float = 1.0) -> bool:
+    """True if ``res`` continues the branch through ``prev`` (and ``prev2``): trimmed, the same branch
+    tip Mach below 0.9, and rotor speed, descent rate, inflow and tip twist within ``STEP_*`` of
+    the secant prediction. A False here means: halve the step (or a fold). The branch may move
+    continuously across V_c/v_h = -2 (its points there are then ``windmill-brake``); a jump onto the
+    separate windmill-brake root (descent rates 2-4 times the normal one) fails the descent check."""
+    if not _plausible(res, None):
+        return False
+    vh = _hover_induced(res.model)
+    x1 = _trim_scalars(prev)
+    pred = x1 if prev2 is None else x1 + s * (x1 - _trim_scalars(prev2))
+    d = np.abs(_trim_scalars(res) - pred)
+    return bool(d[0] <= STEP_OMEGA_REL * prev.omega_rad_s and d[1] <= STEP_SPEED_VH * vh
+                and d[2] <= STEP_SPEED_VH * vh and d[3] <= STEP_TWIST_RAD)
 
 
 def _max_thrust_level(model: CompiledModel, airspeed_m_s: float, omega: float, y0: np.ndarray, dt: float) -> TrimResult:

@@ -65,10 +65,10 @@ def test_forward_branch_end_starts_from_the_nearest_trim(mccutcheon, monkeypatch
     refusing every trim above mu 0.2)."""
     real = trim_mod._solve_forward_at
 
-    def refuse_fast(model, hold, guess):
+    def refuse_fast(model, hold, guess, settle=False):
         if model.flight.mu is not None and model.flight.mu > 0.2:
             return TrimResult("no-autorotation", reason="refused by the test", model=model)
-        return real(model, hold, guess)
+        return real(model, hold, guess, settle)
 
     monkeypatch.setattr(trim_mod, "_solve_forward_at", refuse_fast)
     model = _with_gj_scale(compile_model(mccutcheon, FlightCondition(mu=0.3), SolverSettings()), 30.0)
