@@ -32,7 +32,7 @@ DEFAULT_CG = tuple(round(float(x), 6) for x in np.linspace(0.20, 0.50, 16))
 #: solver sources whose content enters the case key (with ``__version__``), so stored cells are
 #: never served for a changed solver
 _SOLVER_SOURCES = ("airfoil", "airfoil_kernel", "atan2_kernel", "blade_symmetry", "column", "continuation",
-                   "equilibrium", "flight", "jit", "kernel_guard", "kernels", "layout", "model", "periodic_trim",
+                   "equilibrium", "flight", "floquet", "jit", "kernel_guard", "kernels", "layout", "model", "periodic_trim",
                    "rigid_equivalence", "rotor", "shapes", "shooting", "simulation", "sincos_kernel", "stability",
                    "structure", "trim", "trim_kernels", "verdict",
                    "boundary/intervals", "boundary/tasks", "boundary/result")

@@ -241,12 +241,12 @@ def test_krylov_floquet_matches_the_full_monodromy(paper, fidelity, cg, gj):
 def test_krylov_that_does_not_resolve_its_modes_falls_back_to_the_full_matrix(paper, monkeypatch):
     """Arnoldi capped at 8 vectors cannot resolve 20 multipliers: the analysis then forms the full
     matrix and reports every mode, as the one-sided scheme does."""
-    import amra_core.stability as stab
+    import amra_core.floquet as floquet
     m = _model(paper, 0.36, 1000.0, flight=FlightCondition(mu=0.1))
     tr = trim(m)
-    monkeypatch.setattr(stab, "KRYLOV_MAX_DIM", 8)
+    monkeypatch.setattr(floquet, "KRYLOV_MAX_DIM", 8)
     from amra_core.model import Y_OMEGA, stable_time_step
-    *_, converged = stab.floquet_krylov(tr.model, tr.state, stable_time_step(tr.model, 1.3 * tr.state[Y_OMEGA]))
+    *_, converged = floquet.floquet_krylov(tr.model, tr.state, stable_time_step(tr.model, 1.3 * tr.state[Y_OMEGA]))
     assert not converged
     capped, full = analyse(m, tr, "krylov"), analyse(m, tr, "forward")
     assert [md.real_part_per_s for md in capped.modes] == [md.real_part_per_s for md in full.modes]
