@@ -14,13 +14,16 @@ from __future__ import annotations
 import math
 from typing import Optional
 
+import numpy as np
+
 from .continuation import (STEP_OMEGA_REL, STEP_SPEED_VH, STEP_TWIST_RAD, _faster_branch,  # noqa: F401
                            _with_gj_scale, continue_to, on_branch, predict)
 from .equilibrium import (FORWARD_COLD_START_MU, FORWARD_MIN_STEP_MU, FORWARD_STEP_MU, MU_RANGE,  # noqa: F401
                           WINDMILL_BRAKE_RATIO, TrimResult, _hover_induced, _plausible, _solve_at,
                           _trim_axial_from, branch_of, gj_mean_of, omega_guess, trim_axial, trim_forward,
                           trim_forward_continued, windmill_brake_state)
-from .model import CompiledModel
+from .floquet import UNSTABLE_REAL_PART, floquet_krylov
+from .model import CompiledModel, stable_time_step
 
 
 #: Mean GJ [N m^2/rad] above which the trim's stiff start gains nothing: 30x the top of the boundary
@@ -41,7 +44,12 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
     result is ``no-autorotation`` with ``branch_end`` (GJ scale, mean GJ, rotor speed, descent rate
     and tip twist of the last trimmed point, and a windmill-brake equilibrium at the requested GJ
     if one exists) and that point's state and model in ``state``/``model``, from which a simulation
-    can start (model-notes §7). The stiff start is never stiffer than STIFF_START_GJ_NM2 (mean GJ)
+    can start (model-notes §7). In forward flight ``branch_end["last_trim_max_multiplier"]`` is the
+    largest Floquet multiplier of that last trimmed point (the fold's own one left out,
+    :func:`_largest_multiplier`); where it shows the point already unstable, the reason does not call
+    the end a fold: the continuation cannot hold an unstable periodic orbit, and the branch may go on
+    below (rigid McCutcheon, mu 0.1: it ends at GJ 299, and settled shooting trims GJ 290 and 280,
+    also unstable). The stiff start is never stiffer than STIFF_START_GJ_NM2 (mean GJ)
     unless the blade itself is: a blade of GJ 1e6 starts at its own GJ, not at 3e7."""
     hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
     if hold is not None and not model.flight.is_axial:
@@ -94,7 +102,14 @@ def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult,
             jump.reason = (f"the trim branch through the stiff blade folds at mean GJ "
                            f"{gj_mean * lo:.0f} N m^2/rad; this trim is on the faster branch")
             return jump
-    if runaway == "collapse":
+    multiplier = _largest_multiplier(prev) if not model.flight.is_axial else None
+    period_s = 2.0 * math.pi / prev.omega_rad_s
+    if multiplier is not None and math.log(max(multiplier, 1e-300)) / period_s > UNSTABLE_REAL_PART:
+        out.reason = (f"no trim found below mean GJ {gj_mean * lo:.0f} N m^2/rad, and that is not shown to be a "
+                      f"fold: the last trimmed point of the branch followed down in GJ is already unstable (its "
+                      f"largest Floquet multiplier is {multiplier:.3f} per revolution), and the continuation cannot "
+                      f"hold an unstable periodic orbit. An unstable (fluttering) autorotation may go on below")
+    elif runaway == "collapse":
         out.reason = ("no steady autorotation: following the trim branch down in GJ, the torque balance "
                       "loses its solution (elastic nose-up twist raises the blade pitch until drag wins)")
     else:
@@ -106,7 +121,8 @@ def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult,
                       "descent_rate_m_s": float(prev.descent_rate_m_s),
                       "disk_tilt_rad": float(prev.disk_tilt_rad),
                       "tip_twist_rad": float(prev.tip_twist_rad),
-                      "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway}
+                      "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway,
+                      "last_trim_max_multiplier": multiplier}
     wb = windmill_brake_state(model, hold)
     if wb is not None:
         out.branch_end["windmill_brake_descent_rate_m_s"] = float(wb.descent_rate_m_s)
@@ -114,3 +130,18 @@ def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult,
                        f"{wb.descent_ratio:.1f} v_h), which is not autorotation")
     out.start = prev
     return out
+
+
+def _largest_multiplier(res: TrimResult) -> float:
+    """The largest Floquet multiplier magnitude [per revolution] of a forward-flight trim ``res``
+    (Arnoldi, :func:`amra_core.floquet.floquet_krylov`, at the step :func:`amra_core.stability.analyse`
+    uses), leaving out the real positive multiplier nearest 1: at a fold that one passes through 1 (the
+    branch's own direction: fem-coupled, mu 0.5, 1.005 at its last trim), whatever the other modes
+    do. Above 1 (by more than :data:`amra_core.floquet.UNSTABLE_REAL_PART` in a revolution) the periodic
+    autorotation is unstable apart from the fold."""
+    dt = stable_time_step(res.model, 1.3 * res.omega_rad_s)
+    z = floquet_krylov(res.model, res.state, dt)[0]
+    positive = np.flatnonzero((np.abs(z.imag) <= 1e-9 * np.abs(z)) & (z.real > 0.0))
+    if len(positive):
+        z = np.delete(z, positive[np.argmin(np.abs(z[positive].real - 1.0))])
+    return float(np.abs(z).max()) if len(z) else 0.0

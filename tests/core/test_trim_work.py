@@ -132,6 +132,24 @@ def test_the_fallback_residual_kernel_is_the_right_hand_side(mccutcheon, fidelit
         np.testing.assert_array_equal(out, dy[ir])
 
 
+
+def test_a_forward_branch_end_on_an_unstable_orbit_is_not_called_a_fold(mccutcheon):
+    """The branch of the test above ends at GJ 299, where its trim is already unstable (largest
+    Floquet multiplier 2.24 per revolution, a complex pair: flutter). The trim no longer calls that a
+    fold of the torque balance, because the branch goes on below it. Settled shooting
+    (``PeriodicShooting.settle``) from the last trim trims GJ 290 at 27.79 rad/s, also unstable
+    (multiplier 1.76); the plain Newton iteration of the continuation does not converge there."""
+    model = compile_model(mccutcheon.with_overrides(gj_nm2=200.0), FlightCondition(mu=0.1), SolverSettings("rigid"))
+    res = trim(model)
+    assert res.status == "no-autorotation"
+    assert res.branch_end["last_trim_max_multiplier"] > 1.5
+    assert "not shown to be a fold" in res.reason and "torque balance loses" not in res.reason
+    below = compile_model(mccutcheon.with_overrides(gj_nm2=290.0), FlightCondition(mu=0.1), SolverSettings("rigid"))
+    on = equilibrium._solve_forward_at(below, None, res.start, settle=True)
+    assert on.status == "trimmed"
+    assert on.omega_rad_s == pytest.approx(res.branch_end["omega_rad_s"], rel=0.01)
+    assert trim_module._largest_multiplier(on) > 1.0
+
 def test_the_advance_ratio_continuation_stays_on_its_branch(mccutcheon):
     """Followed up in advance ratio at its mean GJ (1478.3), the rigid McCutcheon branch reaches mu 0.5 where the
     continuation in GJ does (the test above: 40.228 rad/s, descent 7.937 m/s). The last step, from
