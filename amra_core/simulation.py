@@ -115,7 +115,9 @@ class Simulation:
                 self.model = _with_controls_of(self.model, tr.model,
                                                airspeed_m_s=_requested_airspeed(be, case.flight, self.model))
             else:
-                self.start_note = (f"no steady autorotation for these parameters: started from the end of the trim "
+                self.start_note = (("no trim found for these parameters (the branch's last trim is already unstable)"
+                                    if be.get("last_trim_unstable") else "no steady autorotation for these parameters")
+                                   + f": started from the end of the trim "
                                    f"branch (GJ x{be.get('gj_scale', float('nan')):.3g}, mean GJ "
                                    f"{be.get('gj_mean_nm2', float('nan')):.0f} N m^2/rad, rotor speed "
                                    f"{be.get('omega_rad_s', float('nan')):.2f} rad/s) with the requested parameters "

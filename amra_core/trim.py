@@ -46,7 +46,8 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
     if one exists) and that point's state and model in ``state``/``model``, from which a simulation
     can start (model-notes §7). In forward flight ``branch_end["last_trim_max_multiplier"]`` is the
     largest Floquet multiplier of that last trimmed point (the fold's own one left out,
-    :func:`_largest_multiplier`); where it shows the point already unstable, the reason does not call
+    :func:`_largest_multiplier`) and ``last_trim_unstable`` whether it shows that point already unstable;
+    then the reason does not call
     the end a fold: the continuation cannot hold an unstable periodic orbit, and the branch may go on
     below (rigid McCutcheon, mu 0.1: it ends at GJ 299, and settled shooting trims GJ 290 and 280,
     also unstable). The stiff start is never stiffer than STIFF_START_GJ_NM2 (mean GJ)
@@ -104,7 +105,8 @@ def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult,
             return jump
     multiplier = _largest_multiplier(prev) if not model.flight.is_axial else None
     period_s = 2.0 * math.pi / prev.omega_rad_s
-    if multiplier is not None and math.log(max(multiplier, 1e-300)) / period_s > UNSTABLE_REAL_PART:
+    unstable = multiplier is not None and math.log(max(multiplier, 1e-300)) / period_s > UNSTABLE_REAL_PART
+    if unstable:
         out.reason = (f"no trim found below mean GJ {gj_mean * lo:.0f} N m^2/rad, and that is not shown to be a "
                       f"fold: the last trimmed point of the branch followed down in GJ is already unstable (its "
                       f"largest Floquet multiplier is {multiplier:.3f} per revolution), and the continuation cannot "
@@ -122,7 +124,7 @@ def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult,
                       "disk_tilt_rad": float(prev.disk_tilt_rad),
                       "tip_twist_rad": float(prev.tip_twist_rad),
                       "omega_stiff_rad_s": float(first.omega_rad_s), "runaway": runaway,
-                      "last_trim_max_multiplier": multiplier}
+                      "last_trim_max_multiplier": multiplier, "last_trim_unstable": unstable}
     wb = windmill_brake_state(model, hold)
     if wb is not None:
         out.branch_end["windmill_brake_descent_rate_m_s"] = float(wb.descent_rate_m_s)

@@ -142,13 +142,15 @@ def test_a_forward_branch_end_on_an_unstable_orbit_is_not_called_a_fold(mccutche
     model = compile_model(mccutcheon.with_overrides(gj_nm2=200.0), FlightCondition(mu=0.1), SolverSettings("rigid"))
     res = trim(model)
     assert res.status == "no-autorotation"
-    assert res.branch_end["last_trim_max_multiplier"] > 1.5
+    assert res.branch_end["last_trim_max_multiplier"] > 1.5 and res.branch_end["last_trim_unstable"]
     assert "not shown to be a fold" in res.reason and "torque balance loses" not in res.reason
     below = compile_model(mccutcheon.with_overrides(gj_nm2=290.0), FlightCondition(mu=0.1), SolverSettings("rigid"))
     on = equilibrium._solve_forward_at(below, None, res.start, settle=True)
     assert on.status == "trimmed"
     assert on.omega_rad_s == pytest.approx(res.branch_end["omega_rad_s"], rel=0.01)
     assert trim_module._largest_multiplier(on) > 1.0
+    from amra_core.simulation import Case, Simulation
+    assert "already unstable" in Simulation(Case(model.rotor, model.flight, model.settings, 1.0), res).start_note
 
 def test_the_advance_ratio_continuation_stays_on_its_branch(mccutcheon):
     """Followed up in advance ratio at its mean GJ (1478.3), the rigid McCutcheon branch reaches mu 0.5 where the
