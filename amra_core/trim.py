@@ -49,8 +49,9 @@ def trim(model: CompiledModel, omega_hold: Optional[float] = None, n_steps: int 
     :func:`_largest_multiplier`), and ``last_trim_unstable`` says whether it shows that point already
     unstable. Then the reason does not call the end a fold: the continuation cannot hold an unstable
     periodic orbit, and the branch may go on below (rigid McCutcheon, mu 0.1: it ends at GJ 299,
-    and settled shooting trims GJ 290 and 280, also unstable). The stiff start is never stiffer than STIFF_START_GJ_NM2 (mean GJ)
-    unless the blade itself is: a blade of GJ 1e6 starts at its own GJ, not at 3e7."""
+    and settled shooting trims GJ 290 and 280, also unstable). The stiff start is never stiffer than
+    STIFF_START_GJ_NM2 (mean GJ) unless the blade itself is: a blade of GJ 1e6 starts at its own GJ,
+    not at 3e7."""
     hold = omega_hold if omega_hold is not None else model.flight.omega_hold_rad_s
     if hold is not None and not model.flight.is_axial:
         return _solve_at(model, hold, None)  # rotor speed held (Table 1): no autorotation branch to follow
