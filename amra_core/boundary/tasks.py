@@ -68,7 +68,7 @@ def cells_of_walk(cg: float, points: list, top_omega: Optional[float] = None) ->
     end descends into that state; the cell keeps ``branch`` and ``boundary_kind`` windmill-brake),
     the normal branch overspeeding is ``overspeed`` unless a mode grows there (then ``flutter`` or
     ``divergence``, as a run from it would say first)."""
-    from ..stability import UNSTABLE_REAL_PART, cell_from_modes
+    from ..stability import MIN_FLUTTER_HZ, UNSTABLE_REAL_PART, cell_from_modes
     pts = sorted(points, key=lambda p: p.gj_nm2)
     on_branch = ("normal", "overspeed")
     if top_omega is None:
@@ -94,8 +94,16 @@ def cells_of_walk(cg: float, points: list, top_omega: Optional[float] = None) ->
         elif kind == "fold":
             above = next((q for q in pts[i + 1:] if q.branch in on_branch), None)
             rising = above is not None and top_omega is not None and above.trim.omega_rad_s > top_omega
+            why = p.reason or "no trim on the normal branch"
+            fluttering = [m for m in (above.modes or ()) if m.real_part_per_s >= UNSTABLE_REAL_PART
+                          and m.frequency_hz >= MIN_FLUTTER_HZ] if above is not None and not rising else []
+            if fluttering:  # as amra_core.trim._branch_end says of the same end
+                crit = max(fluttering, key=lambda m: m.real_part_per_s)
+                why = (f"no trim found below GJ {above.gj_nm2:.0f} N m^2/rad, where the autorotation already "
+                       f"flutters ({crit.label}, {crit.real_part_per_s:+.3g} 1/s): not shown to be a fold, an "
+                       f"unstable autorotation may go on below")
             c = CellResult(cg, p.gj_nm2, "overspeed" if rising else "no-autorotation", False, "fold", None, None,
-                           None, p.reason or "no trim on the normal branch", "none")
+                           None, why, "none")
         else:
             c = failed_cell(cg, p.gj_nm2, f"numerical failure: {p.reason}")
         cells.append(c)
