@@ -536,7 +536,7 @@ def trim_forward_continued(model: CompiledModel) -> TrimResult:
             return res if _plausible(res, None) else None
         if not on_branch(res, guess, prev2, ratio):
             # a step that failed is tried again with every trial shot all the way onto its orbit:
-            # near mu 0.5 the orbit is unstable (multipliers -1.8 to -3.4 per revolution), and one
+            # near mu 0.5 the orbit is unstable (largest multipliers 1.8 to 3.4 per revolution), and one
             # chord Newton step leaves a gap that the averaging revolution amplifies
             return None if settle else solve(s, guess, prev2, ratio, True)
         return res

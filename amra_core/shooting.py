@@ -19,7 +19,11 @@ column), one Newton step from any ``y`` near the orbit is
 for the whole state (azimuth advanced by one revolution). ``Phi_s`` is reused while the controls
 change (a chord Newton: the projection's own error shrinks with each step the trim takes); the
 callers form it again when their iteration stalls with it (:func:`amra_core.equilibrium.trim_forward`,
-:class:`amra_core.periodic_trim.PeriodicContinuation`).
+:class:`amra_core.periodic_trim.PeriodicContinuation`). A *settling* shooting
+(:attr:`PeriodicShooting.settle`) repeats the step until the gap is below :data:`SETTLE_GAP`, and
+forms the matrix again where a step does not halve the gap. On an unstable orbit, one step leaves
+a gap that the next revolution amplifies. The continuation in advance ratio retries a failed step
+this way (:func:`amra_core.equilibrium.trim_forward_continued`).
 
 A matrix reused at another GJ is first written in that model's structural coordinates. At the FEM
 levels they are modal, and the modes come from an eigensolver: from one GJ to the next a mode may

@@ -138,9 +138,10 @@ def _largest_multiplier(res: TrimResult) -> float:
     """The largest Floquet multiplier magnitude [per revolution] of a forward-flight trim ``res``
     (Arnoldi, :func:`amra_core.floquet.floquet_krylov`, at the step :func:`amra_core.stability.analyse`
     uses), leaving out the real positive multiplier nearest 1: at a fold that one passes through 1 (the
-    branch's own direction: fem-coupled, mu 0.5, 1.005 at its last trim), whatever the other modes
-    do. Above 1 (by more than :data:`amra_core.floquet.UNSTABLE_REAL_PART` in a revolution) the periodic
-    autorotation is unstable apart from the fold."""
+    branch's own direction), whatever the other modes do. Fem-torsion McCutcheon, mu 0.5, last trim
+    (GJ 2103): -5.45, -3.04 and +0.996, the last one left out. Above 1 (by more than
+    :data:`amra_core.floquet.UNSTABLE_REAL_PART` in a revolution) the periodic autorotation is unstable
+    apart from the fold."""
     dt = stable_time_step(res.model, 1.3 * res.omega_rad_s)
     z = floquet_krylov(res.model, res.state, dt)[0]
     positive = np.flatnonzero((np.abs(z.imag) <= 1e-9 * np.abs(z)) & (z.real > 0.0))
