@@ -105,7 +105,7 @@ def _branch_end(model: CompiledModel, hold, first: TrimResult, prev: TrimResult,
             return jump
     multiplier = _largest_multiplier(prev) if not model.flight.is_axial else None
     period_s = 2.0 * math.pi / prev.omega_rad_s
-    unstable = multiplier is not None and math.log(max(multiplier, 1e-300)) / period_s > UNSTABLE_REAL_PART
+    unstable = bool(multiplier is not None and math.log(max(multiplier, 1e-300)) / period_s > UNSTABLE_REAL_PART)
     if unstable:
         out.reason = (f"no trim found below mean GJ {gj_mean * lo:.0f} N m^2/rad, and that is not shown to be a "
                       f"fold: the last trimmed point of the branch followed down in GJ is already unstable (its "

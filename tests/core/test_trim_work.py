@@ -142,7 +142,7 @@ def test_a_forward_branch_end_on_an_unstable_orbit_is_not_called_a_fold(mccutche
     model = compile_model(mccutcheon.with_overrides(gj_nm2=200.0), FlightCondition(mu=0.1), SolverSettings("rigid"))
     res = trim(model)
     assert res.status == "no-autorotation"
-    assert res.branch_end["last_trim_max_multiplier"] > 1.5 and res.branch_end["last_trim_unstable"]
+    assert res.branch_end["last_trim_max_multiplier"] > 1.5 and res.branch_end["last_trim_unstable"] is True
     assert "not shown to be a fold" in res.reason and "torque balance loses" not in res.reason
     below = compile_model(mccutcheon.with_overrides(gj_nm2=290.0), FlightCondition(mu=0.1), SolverSettings("rigid"))
     on = equilibrium._solve_forward_at(below, None, res.start, settle=True)
