@@ -30,11 +30,12 @@ levels they are modal, and the modes come from an eigensolver: from one GJ to th
 change sign, and the two blades' nearly equal-frequency pairs turn within their plane. Used in the
 wrong coordinates, the matrix threw the projection off (fem-torsion, McCutcheon, mu 0.5: the trim's
 continuation in GJ ended its branch anywhere from mean GJ 2041 to 2989 N m^2/rad for seven GJ
-values within 1 % of the blade's own 1478; in the right coordinates, 2097-2175, and at 1478 itself
-it trims, at 35.90 rad/s, as continuation in advance ratio at that GJ does). What still stops the
+values within 1 % of the blade's own 1478; in the right coordinates, 2097-2175). What still stops the
 continuation there: below GJ 3,000-4,000 that periodic orbit is unstable (Floquet multipliers -2.6
-to -3.8 per revolution), and the revolution marched after one projection amplifies what is left
-of the periodicity gap.
+to -5.5 per revolution), and the revolution marched after one projection amplifies what is left
+of the periodicity gap. Whether the blade's own GJ then trims (35.90 rad/s on one machine) or the
+branch ends near 2100 (on another) depends on the last bits; :func:`amra_core.trim.trim` says
+when such an end is on an unstable orbit and so not shown to be a fold.
 """
 from __future__ import annotations
 
