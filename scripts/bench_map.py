@@ -62,7 +62,8 @@ def _revolutions(fidelity: str, cg: float) -> dict:
 
     def counting(y, t0, dt, n_steps, *rest):
         caller = sys._getframe(1).f_globals.get("__name__", "")
-        counts["stability" if caller.endswith(".stability") else "trim"] += n_steps * dt * float(y[Y_OMEGA]) / (2 * math.pi)
+        stability = caller.endswith((".stability", ".floquet"))  # the monodromy marches are in floquet
+        counts["stability" if stability else "trim"] += n_steps * dt * float(y[Y_OMEGA]) / (2 * math.pi)
         return real(y, t0, dt, n_steps, *rest)
 
     kernel_guard.advance = counting
