@@ -37,8 +37,8 @@ from .model import CompiledModel, compile_model
 from .periodic_trim import PeriodicContinuation
 from .rotor import Rotor
 from .stability import MIN_FLUTTER_HZ, UNSTABLE_REAL_PART, Mode, analyse
-from .continuation import _faster_branch, continue_to, mark_continued, on_branch
-from .equilibrium import TrimResult, _plausible, _solve_at, trim_axial, windmill_brake_state
+from .continuation import _faster_branch, continue_to, mark_continued
+from .equilibrium import TrimResult, _plausible, _solve_at, on_branch, trim_axial, windmill_brake_state
 from .trim import trim
 
 KINDS = ("stable", "flutter", "fold", "overspeed", "windmill-brake", "failed")

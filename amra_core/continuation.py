@@ -13,8 +13,7 @@ from typing import Optional
 
 import numpy as np
 
-from .equilibrium import (STEP_OMEGA_REL, STEP_SPEED_VH, STEP_TWIST_RAD, TrimResult, _hover_induced,  # noqa: F401
-                          _plausible, _solve_at, _trim_axial_from, on_branch)
+from .equilibrium import TrimResult, _plausible, _solve_at, _trim_axial_from
 from .model import CompiledModel, Y_OMEGA, Y_PSI, compile_model, transfer_state
 
 

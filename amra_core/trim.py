@@ -16,9 +16,9 @@ from typing import Optional
 
 import numpy as np
 
-from .continuation import (STEP_OMEGA_REL, STEP_SPEED_VH, STEP_TWIST_RAD, _faster_branch,  # noqa: F401
-                           _with_gj_scale, continue_to, on_branch, predict)
+from .continuation import _faster_branch, _with_gj_scale, continue_to, predict  # noqa: F401
 from .equilibrium import (FORWARD_COLD_START_MU, FORWARD_MIN_STEP_MU, FORWARD_STEP_MU, MU_RANGE,  # noqa: F401
+                          STEP_OMEGA_REL, STEP_SPEED_VH, STEP_TWIST_RAD, on_branch,
                           WINDMILL_BRAKE_RATIO, TrimResult, _hover_induced, _plausible, _solve_at,
                           _trim_axial_from, branch_of, gj_mean_of, omega_guess, trim_axial, trim_forward,
                           trim_forward_continued, windmill_brake_state)
