@@ -83,9 +83,10 @@ class SolverSettings:
     the first torsion frequency of the uniform cantilever; default) | ``static`` (the same
     load-weighted static twist under an ``r^2`` moment, about 1.6 x softer), see
     :mod:`amra_core.rigid_equivalence`; the FEM levels ignore it;
-    ``integrator``: ``lawson`` (default: the FEM levels' modal oscillators integrated exactly, RK4
-    for the rest, so the step follows the physics, not the stiffest retained mode; see
-    :func:`amra_core.kernels.advance`) | ``rk4`` (plain RK4). The rigid level always uses RK4.
+    ``integrator``: ``lawson`` (default: the FEM levels' modal oscillators integrated exactly, and in
+    axial flight the Wagner states' decay at every level, RK4 for the rest, so the step follows the
+    physics, not the stiffest retained mode; see :func:`amra_core.kernels.advance`) | ``rk4``
+    (plain RK4).
     """
 
     fidelity: str = "rigid"

@@ -32,7 +32,7 @@ from collections import OrderedDict
 import numpy as np
 
 from . import kernels
-from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_LAWSON, P_INFLOW3, P_NS, P_NST, P_UNIT_MASS,
+from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_LAWSON, P_LAWSON_LAGS, P_INFLOW3, P_NS, P_NST, P_UNIT_MASS,
                      STATION_STRIDE, ModelArrays, station_shapes, station_vectors)
 
 
@@ -75,8 +75,9 @@ def _counts(m: ModelArrays):
         raise KernelShapeError(f"ModelArrays.p[P_NS] (structural coordinates) = {ns_f!r} must be a positive whole number")
     if not (1.0 <= nst_f < 1e9 and nst_f == int(nst_f)):
         raise KernelShapeError(f"ModelArrays.p[P_NST] (stations) = {nst_f!r} must be a positive whole number")
-    if p.item(P_LAWSON) not in (0.0, 1.0):
-        raise KernelShapeError(f"ModelArrays.p[P_LAWSON] = {p.item(P_LAWSON)!r} must be 0 (RK4) or 1 (Lawson)")
+    for slot, name in ((P_LAWSON, "P_LAWSON"), (P_LAWSON_LAGS, "P_LAWSON_LAGS")):
+        if p.item(slot) not in (0.0, 1.0):
+            raise KernelShapeError(f"ModelArrays.p[{name}] = {p.item(slot)!r} must be 0 (RK4) or 1 (Lawson)")
     return int(ns_f), int(nst_f), in3 > 0.5, unit > 0.5
 
 

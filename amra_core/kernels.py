@@ -21,7 +21,7 @@ from .jit import exact_kernel, inline_kernel, kernel
 from .sincos_kernel import sincos
 from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LOADS, N_Y_FIXED, P_A_SOUND,
                     P_AERO, P_ALPHA_S, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_K2LAG, P_KLAG, P_MASS,
-                    P_LAWSON, P_UNIT_MASS,
+                    P_LAWSON, P_LAWSON_LAGS, P_UNIT_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
                     P_VH, S_A, S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, STATION_STRIDE, SV_A, SV_C, SV_R, SV_SIGN,
                     SV_THETA0, SV_W, SV_XAC, SV_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0,
@@ -29,7 +29,7 @@ from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LO
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "10a16ff60ee721f9"
+CACHE_STAMP = "af29e4257887c9db"
 
 A1, A2 = WAGNER_A
 B1, B2 = WAGNER_B
@@ -523,6 +523,12 @@ def record_row(t, y, m, loads, row):
 #: the oscillators' frequencies follow the rotor speed, rounded to this bin [rad/s]: a function of
 #: the state alone, so a run in chunks takes the steps of one long run, bit for bit
 OSCILLATOR_OMEGA_BIN = 0.02
+#: the Wagner decay's reference section speed is at least this [m/s] (a rotor at rest)
+LAG_SPEED_FLOOR = 1.0
+#: the Wagner decays follow the rotor speed in coarser bins [rad/s] (0.25 rad/s off is 1 m/s of
+#: section speed at a 4 m tip, which RK4 takes with the rest): the run's rotor-speed ripple would
+#: otherwise make their 4 n_st exponentials again every few steps (3 % of a fem-coupled step)
+LAG_OMEGA_BIN = 0.5
 
 
 @inline_kernel
@@ -535,6 +541,49 @@ def oscillator_tables(m, om, dt, w2, cr, sw, ws):
             cr[i] = math.cos(0.5 * dt * w); sw[i] = math.sin(0.5 * dt * w) / w; ws[i] = w * math.sin(0.5 * dt * w)
         else:
             cr[i] = 1.0; sw[i] = 0.5 * dt; ws[i] = 0.0
+
+
+@inline_kernel
+def lag_tables(m, om, dt, lam, inv_lam, e2):
+    """The Wagner states' decay rates ``lam = 2 B_k max(|om| r, LAG_SPEED_FLOOR) / c`` [1/s] (the
+    section speed of the rotation alone), their inverses and their half-step flow ``exp(-lam dt/2)``."""
+    for s in range(lam.shape[0] // 2):
+        base = 2.0 * max(abs(om) * m.sv[SV_R, s], LAG_SPEED_FLOOR) / m.sv[SV_C, s]
+        lam[2 * s] = B1 * base; lam[2 * s + 1] = B2 * base
+    for i in range(lam.shape[0]):
+        inv_lam[i] = 1.0 / lam[i]
+        e2[i] = math.exp(-0.5 * dt * lam[i])
+
+
+@inline_kernel
+def lag_start(out, y, k1, a0, inv_lam, lz, e2):
+    """The Wagner rows of Lawson's step, in the rows' own terms: about their rest ``ybar = y - z``
+    under the step's first forces, ``z = -f(y) / lam`` (so N1 = 0), with E2 = ``e2`` the stages are
+    Z2 = E2 z, Z3 = E2 z + h/2 N2, Z4 = E2 (E2 z + h N3), z+ = E2 (E2 z + h/3 (N2 + N3)) + h/6 N4,
+    and N = f(ybar + Z) + lam Z. Here: ``z`` into ``lz``, the rows of Y2 into ``out``."""
+    for i in range(lz.shape[0]):
+        j = a0 + i
+        z = -k1[j] * inv_lam[i]
+        lz[i] = z
+        out[j] = y[j] - z + e2[i] * z
+
+
+@inline_kernel
+def lag_stage(stage, out, y, a0, lam, lz, e2, h, k, n2, n3):
+    """After stage ``stage`` (2, 3, 4) has put ``f`` into ``k``: its N in the Wagner rows (``n2``,
+    ``n3``: the N of stages 2 and 3, as far as known), and the rows of the next point (Y3, Y4; after
+    stage 4 the step's end) into ``out`` (:func:`lag_start`)."""
+    for i in range(lz.shape[0]):
+        j = a0 + i; z = lz[i]; a = e2[i]
+        if stage == 2:
+            k[j] += lam[i] * a * z
+            out[j] = y[j] - z + a * z + 0.5 * h * k[j]
+        elif stage == 3:
+            k[j] += lam[i] * (a * z + 0.5 * h * n2[j])
+            out[j] = y[j] - z + a * (a * z + h * k[j])
+        else:
+            k[j] += lam[i] * a * (a * z + h * n3[j])
+            out[j] = y[j] - z + a * (a * z + h / 3.0 * (n2[j] + n3[j])) + h / 6.0 * k[j]
 
 
 @inline_kernel
@@ -581,15 +630,26 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
     about their static deflection under the step's other forces (so a fixed point of ``f`` stays
     one), and RK4 integrates the rest in their frame: the explicit step no longer follows the
     stiffest retained mode. The method is fourth order for any ``w_i``; what RK4 must resolve is
-    the rest (the stiffness off the diagonal, inertial coupling, aerodynamics)."""
+    the rest (the stiffness off the diagonal, inertial coupling, aerodynamics).
+
+    With ``p[P_LAWSON_LAGS] > 0``, in axial flight (no airspeed), at every level: the Wagner states'
+    decay ``x_k' = -lam_k x_k``, ``lam_k = 2 B_k Omega r / c`` at the rotation's section speed (in the
+    same rotor-speed bins), is integrated exactly too, about the states' rest under the step's first
+    forces (:func:`lag_start`), and RK4 keeps the rest, ``2 B_k (v - Omega r) / c``: the step is no
+    longer bound by the fastest lag state at the tip (:func:`amra_core.model.stable_time_step`)."""
     n = y.shape[0]
     ns = int(m.p[P_NS])
     x0 = N_Y_FIXED; xd0 = N_Y_FIXED + ns
     k1 = np.empty(n); k2 = np.empty(n); k3 = np.empty(n); k4 = np.empty(n); yt = np.empty(n); u = np.empty(n)
     loads = np.zeros(8); work, cw = new_work(m)
-    lawson = m.p[P_LAWSON] > 0.5
+    osc = m.p[P_LAWSON] > 0.5
+    theo = m.p[P_AERO] > 0.5 and m.p[P_QUASI_STATIC] < 0.5 and m.p[P_VACUUM] < 0.5
+    nl = 4 * int(m.p[P_NST]) if m.p[P_LAWSON_LAGS] > 0.5 and theo and m.p[P_VH] <= 0.0 else 0
+    a0 = N_Y_FIXED + 2 * ns
     w2 = np.zeros(ns); xbar = np.zeros(ns); cr = np.ones(ns); sw = np.full(ns, 0.5 * dt); ws = np.zeros(ns)
+    lam = np.ones(nl); inv_lam = np.ones(nl); e2 = np.ones(nl); lz = np.zeros(nl)
     om_l = math.nan  #: the rotor speed the oscillator tables are for (none yet)
+    om_g = math.nan  #: and the Wagner tables
     h = dt
     rows = 0
     status = 0
@@ -603,11 +663,17 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
             rows += 1
         om_old = y[Y_OMEGA]
         finite = True
-        if lawson:
+        if osc:
             om_bin = OSCILLATOR_OMEGA_BIN * round(y[Y_OMEGA] / OSCILLATOR_OMEGA_BIN)
             if om_bin != om_l:
                 om_l = om_bin
                 oscillator_tables(m, om_l, dt, w2, cr, sw, ws)
+        if nl > 0:
+            om_bin = LAG_OMEGA_BIN * round(y[Y_OMEGA] / LAG_OMEGA_BIN)
+            if om_bin != om_g:
+                om_g = om_bin
+                lag_tables(m, om_g, dt, lam, inv_lam, e2)
+        if osc:
             # about the modes' static deflection xbar under this step's other forces (so a fixed
             # point of f stays one): z = y - xbar, E = exp(hL), E2 = exp(hL/2), N = f - L z:
             # Z2 = E2 (z + h/2 k1), Z3 = E2 z + h/2 k2, Z4 = E2 (E2 z + h k3),
@@ -619,17 +685,21 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
             for i in range(n):
                 yt[i] = y[i] + 0.5 * h * k1[i]
             rotate_modes(yt, x0, xd0, ns, cr, sw, ws)
+            lag_start(yt, y, k1, a0, inv_lam, lz, e2)
             stage_rhs(yt, k2, m, loads, work, cw, x0, xd0, ns, w2, xbar)
             for i in range(n):
                 u[i] = y[i]
             rotate_modes(u, x0, xd0, ns, cr, sw, ws)
             for i in range(n):
                 yt[i] = u[i] + 0.5 * h * k2[i]
+            lag_stage(2, yt, y, a0, lam, lz, e2, h, k2, k2, k2)
             stage_rhs(yt, k3, m, loads, work, cw, x0, xd0, ns, w2, xbar)
             for i in range(n):
                 yt[i] = u[i] + h * k3[i]
             rotate_modes(yt, x0, xd0, ns, cr, sw, ws)
+            lag_stage(3, yt, y, a0, lam, lz, e2, h, k3, k2, k3)
             stage_rhs(yt, k4, m, loads, work, cw, x0, xd0, ns, w2, xbar)
+            lag_stage(4, u, y, a0, lam, lz, e2, h, k4, k2, k3)
             for i in range(n):
                 y[i] += h / 6.0 * k1[i]
             rotate_modes(y, x0, xd0, ns, cr, sw, ws)
@@ -640,23 +710,27 @@ def advance(y, t0, dt, n_steps, record_every, m, hist, states, omega_floor):
                 y[i] += h / 6.0 * k4[i]
             for i in range(ns):
                 y[x0 + i] += xbar[i]
-            for i in range(n):
-                if not math.isfinite(y[i]):
-                    finite = False
         else:
             for i in range(n):
                 yt[i] = y[i] + 0.5 * dt * k1[i]
+            lag_start(yt, y, k1, a0, inv_lam, lz, e2)
             rhs(yt, k2, m, loads, work, cw)
             for i in range(n):
                 yt[i] = y[i] + 0.5 * dt * k2[i]
+            lag_stage(2, yt, y, a0, lam, lz, e2, h, k2, k2, k2)
             rhs(yt, k3, m, loads, work, cw)
             for i in range(n):
                 yt[i] = y[i] + dt * k3[i]
+            lag_stage(3, yt, y, a0, lam, lz, e2, h, k3, k2, k3)
             rhs(yt, k4, m, loads, work, cw)
+            lag_stage(4, u, y, a0, lam, lz, e2, h, k4, k2, k3)
             for i in range(n):
                 y[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
-                if not math.isfinite(y[i]):
-                    finite = False
+        for i in range(nl):
+            y[a0 + i] = u[a0 + i]
+        for i in range(n):
+            if not math.isfinite(y[i]):
+                finite = False
         done = s + 1
         # a quarter of the rotor speed in one step is beyond any physical torque (the rotor's
         # inertia allows ~0.1 % per step): the explicit step has left its stability region

@@ -25,7 +25,10 @@ P_UNIT_MASS = 24  #: 1: minv is the identity (a mass-normalised modal basis), so
 #: 1: :func:`amra_core.kernels.advance` integrates the modal oscillators
 #: ``x_i'' = -(k0_ii + Omega^2 k2_ii) x_i`` exactly (Lawson's integrating-factor RK4); 0: plain RK4
 P_LAWSON = 25
-N_P = 26
+#: 1: :func:`amra_core.kernels.advance` integrates the Wagner lag states' decay at the section speed
+#: ``Omega r`` exactly (Lawson); 0: RK4 resolves it
+P_LAWSON_LAGS = 26
+N_P = 27
 
 # --- station table columns --------------------------------------------------------------------
 S_R, S_W, S_C, S_XEA, S_XAC, S_THETA0, S_A = range(7)

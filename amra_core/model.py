@@ -28,7 +28,7 @@ from .structure import assemble, torsion_stiffness
 from .layout import (  # noqa: F401
     L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, ModelArrays, N_LOADS, N_P, N_S_COLS, N_Y_FIXED,
     P_AERO, P_ALPHA_S, P_A_SOUND, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_INFLOW3, P_IR,
-    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_UNIT_MASS, P_VACUUM, P_LAWSON,
+    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_UNIT_MASS, P_VACUUM, P_LAWSON, P_LAWSON_LAGS,
     P_VH, S_A,
     S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0, Y_ZETA1,
     Y_ZETAD0, Y_ZETAD1, station_shapes, station_vectors)
@@ -164,6 +164,9 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     p[P_UNIT_MASS] = float(np.array_equal(minv, np.eye(phi.shape[1])))
     # a reduced basis diagonalises K0 + Omega_ref^2 K2: its oscillators are integrated exactly
     p[P_LAWSON] = float(bool(p[P_UNIT_MASS]) and settings.integrator == "lawson")
+    # and the Wagner states' decay too, in axial flight (the kernel checks the airspeed), where that
+    # lengthens the step at 1.3 x the reference speed (below)
+    p[P_LAWSON_LAGS] = float(settings.integrator == "lawson" and settings.aero == "theodorsen" and flight.is_axial)
     arrays = ModelArrays(
         p=p, minv=own(minv), k0=own(k0), k2=own(k2), c=phi.T @ structural_damping(s, zeta) @ phi,
         st=own(parts.st), shw=own(shw), shd=own(shd), sht=own(sht), tip=own(tip), teeter=own(teeter),
@@ -180,8 +183,13 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
         uglh=np.ascontiguousarray(np.array([minv @ (phi.T @ s.HL[b] @ phi) for b in range(2)])),
         sv=station_vectors(parts.st), kin=station_shapes(shw, shd, sht),
     )
-    return CompiledModel(arrays, mesh.n_q, phi.shape[1], parts.st.shape[0], s.kinds, s, phi, phi_pinv, rotor,
-                         flight, settings)
+    model = CompiledModel(arrays, mesh.n_q, phi.shape[1], parts.st.shape[0], s.kinds, s, phi, phi_pinv, rotor,
+                          flight, settings)
+    if p[P_LAWSON_LAGS] > 0.5:  # only where it lengthens the step (fem-coupled: the rest sets it)
+        exact = stable_time_step(model, 1.3 * omega_ref)
+        p[P_LAWSON_LAGS] = 0.0
+        p[P_LAWSON_LAGS] = float(exact > stable_time_step(model, 1.3 * omega_ref))
+    return model
 
 
 class _GjFreeParts(NamedTuple):
@@ -344,6 +352,8 @@ def _reduction(s, settings: SolverSettings, omega_ref_rad_s: float):
     return phi, phi.T @ s.M, np.eye(phi.shape[1]), phi.T @ s.K0 @ phi, phi.T @ s.K2 @ phi
 
 
+STEP_CAP_S = 0.004  #: longest step [s] when the Wagner states' decay is integrated exactly (stable_time_step)
+RK4_LAG_STEP_CAP_S = 0.003  #: longest step [s] when RK4 integrates the Wagner states (stable_time_step)
 LAWSON_REST_STEP = 0.75  #: dt w_rest of the Lawson step (see stable_time_step)
 LAWSON_FORWARD_CAP_S = 0.002  #: the Lawson step's cap in forward flight [s] (see stable_time_step)
 
@@ -352,7 +362,23 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     """Largest RK4 step [s] that keeps the stiffest structural mode (imaginary eigenvalue,
     |lambda dt| <= 1.5 against the limit 2.83) and the fastest Wagner lag state (real negative
     eigenvalue, |lambda dt| <= 2.0 against 2.79) inside the stability region, capped at
-    3 ms (>= 9 steps per period of a 35 Hz torsion mode; dt convergence is tested).
+    :data:`RK4_LAG_STEP_CAP_S` (3 ms: >= 9 steps per period of a 35 Hz torsion mode; dt convergence
+    is tested).
+
+    In axial flight the default integrator (``p[P_LAWSON_LAGS]``, :func:`amra_core.kernels.advance`)
+    integrates the Wagner states' decay at the rotation's section speed ``Omega r`` exactly; RK4 keeps
+    only the rest, the section speed beyond the rotation's (descent and inflow through the disc, the
+    lag rate: 30 m/s allowed, as above). The step is then set by the collective lag mode (3.69 ms for
+    McCutcheon at 1.3 Omega, rigid; 3.71 ms fem-torsion), capped at :data:`STEP_CAP_S`: 4 ms, >= 7
+    steps per period of the rigid level's 34 Hz torsion mode (McCutcheon, 1.3 Omega), where RK4's
+    numerical damping ratio ``(w dt)^5 / 144`` is 2.1e-3 at 3.69 ms. ``amra bench``'s accuracy
+    against plain RK4 at 1/8 of the step: tip twist 0.87 % (rigid) and 0.37 % (fem-torsion) of its
+    excursion, bound 2 %. :func:`compile_model` keeps the exact decay only where it lengthens this
+    step at 1.3 times the reference speed (not for fem-coupled, whose step the rest of the modal
+    stiffness sets: there it only cost 2 % of a step). In forward flight the Wagner states stay with
+    RK4 and its rule: there
+    ``Omega r`` is not the section speed (the free stream adds ``mu Omega R sin psi``), and at mu 0.5
+    the McCutcheon trims of ``tests/core/test_trim_work.py`` moved by 3 % in descent rate.
 
     Only the undamped ``M^-1 K`` is used: the velocity-dependent terms (structural and lag damping,
     the Coriolis coupling ``2 Omega f`` / ``2 Omega f_lag`` with the rotor speed) and the inertial
@@ -387,9 +413,15 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     i_eff = max(st_.I_lag - 2.0 * st_.S_lag**2 / st_.I_R, 1e-6 * st_.I_lag)
     w_max = max(w_max, float(np.sqrt((st_.k_lag + omega_rad_s**2 * st_.k2_lag) / i_eff)))
     c_min = float(a.st[:, S_C].min())
-    v_tip = omega_rad_s * model.rotor.radius_m + model.flight.airspeed_m_s + 30.0
+    forward = _forward(model)
+    exact_lags = a.p[P_LAWSON_LAGS] > 0.5 and not forward  # (as advance decides)
+    v_rest = model.flight.airspeed_m_s + 30.0  # the section speed RK4 resolves [m/s]
+    v_tip = v_rest if exact_lags else omega_rad_s * model.rotor.radius_m + v_rest
     lam_aero = 2.0 * v_tip / c_min * WAGNER_B[1] if model.settings.aero == "theodorsen" else 0.0
-    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and _forward(model) else 0.003
+    if a.p[P_LAWSON] > 0.5 and forward:
+        cap = LAWSON_FORWARD_CAP_S
+    else:
+        cap = STEP_CAP_S if exact_lags else RK4_LAG_STEP_CAP_S
     return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
 
 

@@ -85,3 +85,19 @@ def test_velocity_terms_do_not_shorten_the_stable_step(preset, fidelity, gj):
         # and the step the solver takes keeps every mode of the full system inside RK4's region
         dt = stable_time_step(model, om)
         assert rk4_amplification(lam * dt).max() <= 1.0 + 1e-9
+
+
+@pytest.mark.parametrize("preset, gj", list(itertools.product(["mccutcheon", "paper-boundary"], [1.0, 300.0, 1e6])))
+def test_the_rigid_step_with_exact_wagner_decay_keeps_the_mechanics_stable(preset, gj):
+    """The default integrator takes the Wagner states out of RK4's hands in axial flight
+    (``test_lawson.py``), so the rigid step grows to the lag mode's limit, capped at 4 ms (3.69 ms
+    for McCutcheon); the mechanics, still RK4's, stay inside its region there at every rotor speed."""
+    from amra_core.model import STEP_CAP_S
+    rotor = load_preset(preset).with_overrides(gj_nm2=gj)
+    model = compile_model(rotor, FlightCondition(), SolverSettings(fidelity="rigid"))
+    plain = compile_model(rotor, FlightCondition(), SolverSettings(fidelity="rigid", integrator="rk4"))
+    for om in (10.0, 40.0, 52.0):
+        dt = stable_time_step(model, om)
+        assert stable_time_step(plain, om) <= dt <= STEP_CAP_S
+        assert dt == pytest.approx(min(undamped_step(model, om), STEP_CAP_S), rel=1e-12)
+        assert rk4_amplification(first_order_eigenvalues(model, om) * dt).max() <= 1.0 + 1e-9
