@@ -251,6 +251,11 @@ def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executa
     # unless the mode is also set in the environment (measured: every page of 8 concurrent
     # sessions fetched cdn.holoviz.org without it)
     env.setdefault("BOKEH_RESOURCES", "server")
+    # Bokeh's own setting for servers: no inspect.signature of every callback a page registers (Panel
+    # links ~230 widget properties per page, each a new partial): page build 541 -> 518 ms in-process
+    # (scripts/bench_page_build.py's page, alternated, median of 25). A bad callback then fails when
+    # called instead of when registered; the in-process app tests keep the check.
+    env.setdefault("BOKEH_PERFORM_ERROR_DIAGNOSTICS", "false")
     env["AMRA_LOG_LEVEL"] = s["log_level"]  # the app's own loggers ("amra.*") follow it (app/warmup.py)
     # Numba: only a thread-safe layer (OpenMP from libgomp1, or TBB) when threads share kernels
     env.setdefault("NUMBA_THREADING_LAYER", "safe")

@@ -47,6 +47,7 @@ def test_defaults_no_wildcard_origin(capsys, monkeypatch):
     assert cmd["env"]["AMRA_STORE"].endswith("amra-store.sqlite")
     assert float(cmd["env"]["AMRA_MAX_RUN_S"]) == 120.0
     assert cmd["env"]["BOKEH_RESOURCES"] == "server"  # no CDN (offline servers; Panel's resource-mode race)
+    assert cmd["env"]["BOKEH_PERFORM_ERROR_DIAGNOSTICS"] == "false"  # Bokeh's setting for a faster page build
 
 
 def test_environment_sets_everything(capsys, monkeypatch, tmp_path):
