@@ -186,9 +186,8 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     model = CompiledModel(arrays, mesh.n_q, phi.shape[1], parts.st.shape[0], s.kinds, s, phi, phi_pinv, rotor,
                           flight, settings)
     if p[P_LAWSON_LAGS] > 0.5:  # only where it lengthens the step (fem-coupled: the rest sets it)
-        exact = stable_time_step(model, 1.3 * omega_ref)
-        p[P_LAWSON_LAGS] = 0.0
-        p[P_LAWSON_LAGS] = float(exact > stable_time_step(model, 1.3 * omega_ref))
+        exact, plain = _step_rules(model, 1.3 * omega_ref)
+        p[P_LAWSON_LAGS] = float(exact > plain)
     return model
 
 
@@ -398,6 +397,13 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     n/rev response reaches the rotor speed through the inertial coupling, and at 3 ms its largest
     error over a kicked run was 3.2e-4 of the rotor speed (fem-torsion, mu 0.1; 2.0e-5 at 1.5 ms,
     fourth order), beyond ``amra bench``'s bound of 1e-4 (``tests/core/test_lawson.py``)."""
+    exact, plain = _step_rules(model, omega_rad_s)
+    return exact if model.arrays.p[P_LAWSON_LAGS] > 0.5 else plain
+
+
+def _step_rules(model: CompiledModel, omega_rad_s: float) -> tuple:
+    """(the step with the Wagner states' decay integrated exactly, the step with RK4 integrating
+    them) [s] of :func:`stable_time_step`; in forward flight both are RK4's (as ``advance`` decides)."""
     a = model.arrays
     if a.p[P_LAWSON] > 0.5:
         w2 = [0.0]
@@ -412,17 +418,17 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     st_ = model.structure  # collective lag against the free rotor: effective inertia I_z - 2 S^2 / I_R
     i_eff = max(st_.I_lag - 2.0 * st_.S_lag**2 / st_.I_R, 1e-6 * st_.I_lag)
     w_max = max(w_max, float(np.sqrt((st_.k_lag + omega_rad_s**2 * st_.k2_lag) / i_eff)))
-    c_min = float(a.st[:, S_C].min())
+    structural = 1.5 / max(w_max, 1.0)
     forward = _forward(model)
-    exact_lags = a.p[P_LAWSON_LAGS] > 0.5 and not forward  # (as advance decides)
-    v_rest = model.flight.airspeed_m_s + 30.0  # the section speed RK4 resolves [m/s]
-    v_tip = v_rest if exact_lags else omega_rad_s * model.rotor.radius_m + v_rest
-    lam_aero = 2.0 * v_tip / c_min * WAGNER_B[1] if model.settings.aero == "theodorsen" else 0.0
-    if a.p[P_LAWSON] > 0.5 and forward:
-        cap = LAWSON_FORWARD_CAP_S
-    else:
-        cap = STEP_CAP_S if exact_lags else RK4_LAG_STEP_CAP_S
-    return min(cap, 1.5 / max(w_max, 1.0), 2.0 / max(lam_aero, 1.0))
+    c_min = float(a.st[:, S_C].min())
+    theo = model.settings.aero == "theodorsen"
+    v_rest = model.flight.airspeed_m_s + 30.0  # the section speed RK4 resolves beyond the rotation's [m/s]
+
+    def wagner(v_m_s: float) -> float:  # the fastest lag state at section speed v within RK4's limits
+        return 2.0 / max(2.0 * v_m_s / c_min * WAGNER_B[1] if theo else 0.0, 1.0)
+    cap = LAWSON_FORWARD_CAP_S if a.p[P_LAWSON] > 0.5 and forward else RK4_LAG_STEP_CAP_S
+    plain = min(cap, structural, wagner(omega_rad_s * model.rotor.radius_m + v_rest))
+    return (plain if forward else min(STEP_CAP_S, structural, wagner(v_rest))), plain
 
 
 #: longest step [s] of a kicked run in forward flight, at every level, up to :data:`FORWARD_RUN_CAP_MU`:
