@@ -32,8 +32,8 @@ from collections import OrderedDict
 import numpy as np
 
 from . import kernels
-from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_LAWSON, P_LAWSON_LAGS, P_INFLOW3, P_NS, P_NST, P_UNIT_MASS,
-                     STATION_STRIDE, ModelArrays, station_shapes, station_vectors)
+from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_LAWSON, P_LAWSON_LAGS, P_INFLOW3, P_NS, P_NST,
+                     P_UNIT_MASS, STATION_STRIDE, ModelArrays, station_shapes, station_vectors)
 
 
 class KernelShapeError(ValueError):

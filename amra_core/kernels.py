@@ -526,8 +526,8 @@ OSCILLATOR_OMEGA_BIN = 0.02
 #: the Wagner decay's reference section speed is at least this [m/s] (a rotor at rest)
 LAG_SPEED_FLOOR = 1.0
 #: the Wagner decays follow the rotor speed in coarser bins [rad/s] (0.25 rad/s off is 1 m/s of
-#: section speed at a 4 m tip, which RK4 takes with the rest): the run's rotor-speed ripple would
-#: otherwise make their 4 n_st exponentials again every few steps (3 % of a fem-coupled step)
+#: section speed at a 4 m tip, which RK4 takes with the rest), so that a run whose rotor speed
+#: ripples by more than the oscillators' bin does not make their 4 n_st exponentials at every step
 LAG_OMEGA_BIN = 0.5
 
 

@@ -28,7 +28,8 @@ from .structure import assemble, torsion_stiffness
 from .layout import (  # noqa: F401
     L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, ModelArrays, N_LOADS, N_P, N_S_COLS, N_Y_FIXED,
     P_AERO, P_ALPHA_S, P_A_SOUND, P_CLAG, P_FLAG, P_G, P_HOLD_OMEGA, P_HOLD_VD, P_ILAG, P_INFLOW3, P_IR,
-    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_UNIT_MASS, P_VACUUM, P_LAWSON, P_LAWSON_LAGS,
+    P_K2LAG, P_KLAG, P_MASS, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_UNIT_MASS, P_VACUUM, P_LAWSON,
+    P_LAWSON_LAGS,
     P_VH, S_A,
     S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0, Y_ZETA1,
     Y_ZETAD0, Y_ZETAD1, station_shapes, station_vectors)
@@ -351,7 +352,8 @@ def _reduction(s, settings: SolverSettings, omega_ref_rad_s: float):
     return phi, phi.T @ s.M, np.eye(phi.shape[1]), phi.T @ s.K0 @ phi, phi.T @ s.K2 @ phi
 
 
-STEP_CAP_S = 0.004  #: longest step [s] when the Wagner states' decay is integrated exactly (stable_time_step)
+#: longest step [s] when the Wagner states' decay is integrated exactly (stable_time_step)
+STEP_CAP_S = 0.004
 RK4_LAG_STEP_CAP_S = 0.003  #: longest step [s] when RK4 integrates the Wagner states (stable_time_step)
 LAWSON_REST_STEP = 0.75  #: dt w_rest of the Lawson step (see stable_time_step)
 
@@ -374,9 +376,9 @@ def stable_time_step(model: CompiledModel, omega_rad_s: float) -> float:
     excursion, bound 2 %. :func:`compile_model` keeps the exact decay only where it lengthens this
     step at 1.3 times the reference speed (not for fem-coupled, whose step the rest of the modal
     stiffness sets: there it only cost 2 % of a step). In forward flight the Wagner states stay with
-    RK4 and its rule: there
-    ``Omega r`` is not the section speed (the free stream adds ``mu Omega R sin psi``), and at mu 0.5
-    the McCutcheon trims of ``tests/core/test_trim_work.py`` moved by 3 % in descent rate.
+    RK4 and its rule: there ``Omega r`` is not the section speed (the free stream adds
+    ``mu Omega R sin psi``), and at mu 0.5 the McCutcheon trims of ``tests/core/test_trim_work.py``
+    moved by 3 % in descent rate.
 
     Only the undamped ``M^-1 K`` is used: the velocity-dependent terms (structural and lag damping,
     the Coriolis coupling ``2 Omega f`` / ``2 Omega f_lag`` with the rotor speed) and the inertial
