@@ -140,7 +140,9 @@ def test_a_long_run_holds_at_most_2000_points_per_curve_and_a_zoom_shows_full_re
     whole = d.live.frame()
     inside = int(((whole["t_s"] >= t0) & (whole["t_s"] <= t1)).sum())
     shown = d.live.shown(1)["t_s"]
-    assert 300 <= inside == int(((shown >= t0) & (shown <= t1)).sum()), (t0, t1, inside)  # full resolution
+    # full resolution: every recorded row of the range (the run records one row per interval, 3-4 ms)
+    rows_per_s = 1.0 / d.session.sim.record_interval_s
+    assert 0.9 * (t1 - t0) * rows_per_s <= inside == int(((shown >= t0) & (shown <= t1)).sum()), (t0, t1, inside)
     assert teeter["n"] == len(shown)
     shot(page, "02b-zoomed")
     page.locator(".bk-tool-icon-reset").nth(1).click()
