@@ -303,6 +303,14 @@ def _march_revs(model: CompiledModel, y: np.ndarray, n_revs: int, dt: float):
 #: blade fluctuate about 1e-3 and a later iterate often falls below it.
 STALL_ITERATIONS = 8
 STALL_FAR = 1e-2
+#: it also stops when its last STALL_ITERATIONS residuals are all above this many times its best one,
+#: whatever the level: it has left that iterate behind. Near an unstable periodic orbit (fem-coupled
+#: McCutcheon, mu 0.5, the continuation in GJ at 3,600-3,700 N m^2/rad) such an iteration drifted on
+#: for all its 30 iterations (residuals from 1e-3 up to 3e-2) and failed. Measured when this came in
+#: (2026-12-07): the McCutcheon trims at every fidelity and mu 0.1-0.5, the validation report and the
+#: mu 0.1 maps gave the same answers as without it, with up to 22 % fewer revolutions marched
+#: (``tests/core/test_trim_work.py``)
+LEFT_BEST_FACTOR = 2.0
 #: halvings of a Newton step that raises the residual (from a continuation step's prediction near
 #: a fold the full step overshoots, and the undamped iteration wandered off a trim that exists)
 BACKTRACKS = 3
@@ -404,6 +412,8 @@ def trim_forward(model: CompiledModel, airspeed_m_s: Optional[float], omega_hold
         if (it >= STALL_ITERATIONS + 4 and min(norms) > STALL_FAR
                 and min(norms[-STALL_ITERATIONS:]) > 0.5 * min(norms[:-STALL_ITERATIONS])):
             break  # stagnation far from a trim: no halving of the best residual lately (it cycles)
+        if it >= STALL_ITERATIONS and min(norms[-STALL_ITERATIONS:]) > LEFT_BEST_FACTOR * min(norms):
+            break  # drifting away from its best iterate, at any level
         # chord Newton: the difference Jacobian (one march per unknown) is formed again only when
         # the last step did not halve the residual; a good one is reused, so an iteration that
         # converges costs one march instead of one plus one per unknown

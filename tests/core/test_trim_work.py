@@ -181,3 +181,19 @@ def test_an_unstable_orbit_does_not_make_the_answer_depend_on_the_last_bit(mccut
         assert res.status == "trimmed", res.reason
         answers.append(res.omega_rad_s)
     assert max(answers) - min(answers) < 5e-3
+
+
+def test_an_iteration_that_leaves_its_best_behind_stops(mccutcheon, revolutions):
+    """Fem-coupled McCutcheon at mu 0.5: the continuation in GJ ends at its last trim, GJ 3,715
+    N m^2/rad, where the branch folds (not shown unstable). Near there the continuation's Newton
+    iterations drifted away from their best iterate (residuals from 1e-3 up to 3e-2) for all their
+    30 iterations; an iteration whose last 8 residuals are all above twice its best now stops, and
+    the continuation halves its step as it did after the 30. The same end with fewer revolutions:
+    2,322 against 2,786 (2026-12-07)."""
+    model = compile_model(mccutcheon, FlightCondition(mu=0.5), SolverSettings("fem-coupled"))
+    res = trim(model)
+    assert res.status == "no-autorotation"
+    assert res.branch_end["gj_mean_nm2"] == pytest.approx(3715.4, rel=0.02)  # the continuation's bracket
+    assert res.branch_end["last_trim_unstable"] is False
+    print(f"revolutions marched: {revolutions[0]}")
+    assert revolutions[0] < 2500
