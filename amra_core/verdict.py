@@ -235,14 +235,15 @@ def _headline(v: "Verdict", t, om, omega_ref: float) -> str:
     end, t_end = float(om[-1]), float(t[-1])
     if v.verdict == "overspeed" and end > 1.5 * omega_ref:
         return f"rotor speed ran away upwards: {end:.1f} rad/s at t = {t_end:.1f} s (start {omega_ref:.1f} rad/s)"
-    change = 100.0 * (end / omega_ref - 1.0)
+    change = f"{100.0 * (end / omega_ref - 1.0):+.0f}"
+    change = "+0" if change == "-0" else change  # a 0.3 % fall rounds to no change: "+0", not "-0"
     if v.verdict == "overspeed":
-        return (f"rotor speed held high: {end:.1f} rad/s at t = {t_end:.1f} s ({change:+.0f} % of the start), "
+        return (f"rotor speed held high: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start), "
                 f"on the overspeeding branch")
     if v.verdict == "no-autorotation":
-        return (f"rotor speed not kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change:+.0f} % of the start, "
+        return (f"rotor speed not kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start, "
                 f"{omega_ref:.1f} rad/s), no normal autorotation")
-    return f"rotor speed kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change:+.0f} % of the start, {omega_ref:.1f} rad/s)"
+    return f"rotor speed kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start, {omega_ref:.1f} rad/s)"
 
 
 def _dominant_frequency(t, d):

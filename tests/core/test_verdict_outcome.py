@@ -127,3 +127,9 @@ def test_a_failure_after_seconds_of_growth_is_the_instability_running_away():
     v = judge(d, HISTORY_COLUMNS, OM0, True, "numerical-failure", True, d[0].copy(), 0.01,
               hover_induced_m_s=V_H, branch="normal")
     assert v.verdict == "numerical-failure", v
+
+
+def test_a_rotor_speed_within_half_a_percent_reads_plus_zero_not_minus_zero():
+    """A run that lost 0.3 % of its rotor speed says "+0 % of the start": a rounded change has no sign."""
+    v = run_judge(history(lambda t: 0.01 * np.exp(-0.3 * t), omega=lambda t: OM0 * (1.0 - 0.003 * t / 20.0)))
+    assert "(+0 % of the start" in v.rotor_speed and "-0 %" not in v.rotor_speed, v.rotor_speed
