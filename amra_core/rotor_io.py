@@ -187,9 +187,13 @@ def rotor_from_dict(data: dict) -> Rotor:
     if not isinstance(blade, dict):
         raise RotorError("blade = (missing) is not allowed: a [blade] table of station arrays is required")
     sources = data.pop("sources", {})
-    if not isinstance(sources, dict) or not all(isinstance(v, str) for v in sources.values()):
+    if not isinstance(sources, dict):
         raise RotorError(f"sources = {_short(sources)} is not allowed: must be a [sources] table of "
                          f"field = \"where the value comes from\" texts")
+    for key, text in sources.items():  # the entry that is wrong, not the whole table
+        if not isinstance(text, str):
+            raise RotorError(f"sources.{key} = {_short(text)} is not allowed: each [sources] entry is a text "
+                             f"saying where the value comes from")
     point = data.pop("point_mass", None)
     if point is not None and not isinstance(point, dict):
         raise RotorError(f"point_mass = {_short(point)} is not allowed: must be a [point_mass] table "

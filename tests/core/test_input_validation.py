@@ -131,6 +131,9 @@ WRONG_ACCEPTS = [
     ("n-blades-float", ("n_blades = 2", "n_blades = 2.0"), "n_blades = 2.0"),
     ("n-blades-bool", ("n_blades = 2", "n_blades = true"), "n_blades = True"),
     ("sources-number", ("\n[sources]\n", "\n[old_sources]\n"), "sources = 5"),
+    # a [sources] entry that is not a text is named, not the whole table echoed
+    ("sources-entry-number", ('airfoil = "the paper\'s choice', 'airfoil = 5\nx = "the paper\'s choice'),
+     "sources.airfoil = 5 is not allowed"),
     ("point-mass-number", ("[blade]", "point_mass = 5\n[blade]"), "point_mass = 5"),
     ("inertia-too-small", ("torsional_inertia_kg_m = [0.010309,", "torsional_inertia_kg_m = [0.0001,"),
      "torsional_inertia_kg_m = 0.0001"),
