@@ -45,15 +45,17 @@ MAP_CLASSES = (
 )
 
 
-def _table(rows) -> str:
-    return "\n".join(f"| **{k}** | {v} |" for k, v in rows)
+def _table(head: str, rows) -> str:
+    """A Markdown table in one block: the header, its rule and the rows on consecutive lines (a blank
+    line between them would end the table and leave its pipes as text)."""
+    return "\n".join([head, "|---|---|"] + [f"| **{k}** | {v} |" for k, v in rows])
 
 
 def help_markdown(controls=None) -> str:
     """The help text (Markdown); with ``controls``, each control's unit and allowed range too."""
     parts = [
-        "### What the verdicts mean", "| verdict | meaning |", "|---|---|", _table(VERDICTS),
-        "### What the map shows", "| class | meaning |", "|---|---|", _table(MAP_CLASSES),
+        "### What the verdicts mean", _table("| verdict | meaning |", VERDICTS),
+        "### What the map shows", _table("| class | meaning |", MAP_CLASSES),
         "### Why a growth rate can be negative on an unstable case",
         "The growth rate is fitted to the envelope of the motion *since the last change*. A case whose "
         "rotor speed collapses (fold, divergence) can have a decaying oscillation on top of the collapse, "
@@ -69,7 +71,7 @@ def help_markdown(controls=None) -> str:
         rows = [(controls.param[n].label, tooltip(controls.param[n]))
                 for n in ("gj_nm2", "ea_pct", "cg_pct", "mu", "fidelity", "aero", "inflow", "run_s", "soften_at_s",
                           "speed")]
-        parts += ["### The controls", "| control | meaning, unit and allowed range |", "|---|---|", _table(rows)]
+        parts += ["### The controls", _table("| control | meaning, unit and allowed range |", rows)]
     return "\n\n".join(parts)
 
 

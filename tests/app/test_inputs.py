@@ -65,3 +65,15 @@ def test_help_explains_every_verdict_and_links_the_sources():
     assert "Why a growth rate can be negative" in text
     assert PAPER_URL in text and REPORT_URL in text
     assert "GJ [N m²/rad]" in text and "Allowed: 10 to 10000" in text
+
+
+def test_help_tables_render_as_tables():
+    """The verdicts, the map classes and the controls are three tables, every row a table row, no
+    pipe left as text (a blank line between a table's header and its rows printed them as text)."""
+    from markdown_it import MarkdownIt
+
+    from app.views.help import MAP_CLASSES, VERDICTS, help_markdown
+    html = MarkdownIt("commonmark").enable("table").render(help_markdown(Controls()))
+    assert html.count("<table>") == 3
+    assert html.count("<tr>") == 3 + len(VERDICTS) + len(MAP_CLASSES) + 10  # headers, verdicts, classes, controls
+    assert "|" not in html.replace("<td>", "").split("<h3>Why")[0], "a table's pipes printed as text"
