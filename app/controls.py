@@ -60,6 +60,11 @@ def _paper(key: str) -> Preset:
               fidelity=pc.fidelity, run_s=pc.run_s, soften_at_s=pc.soften_at_s)
 
 
+#: run length of the Table 1 presets [s]: a stable verdict needs 4.8 s of fit in the run's last two
+#: thirds (:data:`amra_core.verdict.STABLE_MIN_FIT_S`), so a 5 s run ended "undetermined"
+TABLE1_RUN_S = 8.0
+
+
 def _table1(case: str, speed_m_s: float, omega: float, measured: float, amra: float) -> Preset:
     """Table 1 holds the rotor speed at the measured mean in level flight and compares the teeter
     amplitude with the flight measurement and the original AMRA."""
@@ -69,7 +74,7 @@ def _table1(case: str, speed_m_s: float, omega: float, measured: float, amra: fl
             f"rotor speed held, the verdict only says whether the kick dies out.")
     return _p(f"Table 1 {case}: G-UNIV, {speed_m_s:g} m/s, Ω {omega:g} rad/s", text, (measured, amra),
               rotor="mccutcheon", gj_nm2=1471.0, ea_pct=31.4, cg_pct=33.0, mu=0.0, airspeed_m_s=speed_m_s,
-              omega_hold_rad_s=omega, fidelity="rigid", run_s=5.0)
+              omega_hold_rad_s=omega, fidelity="rigid", run_s=TABLE1_RUN_S)
 
 
 PRESETS = MappingProxyType({
@@ -88,7 +93,7 @@ class Controls(param.Parameterized):
     """Every value that determines a run, a stability analysis and a boundary map."""
 
     # -- the case
-    preset = param.Selector(objects=list(PRESETS), default="custom", label="Preset",
+    preset = param.Selector(objects={p.label: key for key, p in PRESETS.items()}, default="custom", label="Preset",
                             doc="A paper case (Figs 10-13, Table 1) or the nominal blade; sets the controls below.")
     rotor = param.Selector(objects=[*preset_names(), UPLOADED], default="paper-boundary", label="Rotor",
                            doc="Shipped rotor description, or the rotor file you uploaded.")
