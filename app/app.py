@@ -8,6 +8,7 @@ Server-wide parts (map jobs, process pools, settings) are in :mod:`app.server`.
 """
 from __future__ import annotations
 
+import json
 from typing import Optional
 
 import numpy as np
@@ -42,6 +43,14 @@ CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", 
 MAP_GJ_RANGE = (30.0, 3000.0)  #: GJ range of the boundary map [N m²/rad]
 REFRESH_PERIOD_S = 0.3  #: the analyses follow the controls at most this often [s]
 PAPER_CG = 0.40  #: the paper's CG (Figs 10-13) [chord fraction]: every map has a column there
+#: in the browser, when presentation mode is toggled: the Bootstrap template's sidebar shown exactly
+#: when it is off (pressing the template's own sidebar button), and the short title while it is on
+PRESENT_LAYOUT_JS = """
+const sidebar = document.getElementById("sidebar"), button = document.getElementById("sidebar-toggle");
+if (sidebar && button && sidebar.classList.contains("show") === cb_obj.active) { button.click(); }
+const title = document.querySelector("#header .app-header .title");
+if (title) { title.textContent = "\\u00a0" + (cb_obj.active ? "AMRA" : %s); }
+""" % json.dumps(TITLE)
 
 
 def map_columns(n: int) -> tuple:
@@ -319,6 +328,9 @@ class Dashboard(pn.viewable.Viewer):
         """The presentation toggle; in presentation mode also the live bar (:meth:`_live_bar`)."""
         toggle = pn.widgets.Toggle.from_param(self.controls.param.present, button_type="light", width=170,
                                               css_classes=["amra-present"], margin=(10, 10))
+        # the template sets its sidebar and title only when the page is built (?present=true): a
+        # toggle mid-session presses the template's own sidebar button, as the user would
+        toggle.jscallback(value=PRESENT_LAYOUT_JS)
         self.head = pn.Row(toggle, sizing_mode="stretch_width")
         return self.head
 

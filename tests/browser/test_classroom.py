@@ -87,6 +87,28 @@ def test_the_presentation_bar_and_advanced_inputs_appear_when_first_asked_for(wa
              what="the late-made airspeed input to set the control")
 
 
+def test_presentation_mode_toggled_mid_session_fits_a_projector(watched_page, dashboard_server):
+    """Toggled on a page built without it, the sidebar collapses and the title shortens, so the
+    header's GJ input and verdict fit 1280 px (the template had set both only at page build);
+    toggled off, both come back."""
+    page = watched_page
+    page.set_viewport_size({"width": 1280, "height": 720})
+    open_dashboard(page, dashboard_server[0] + "?preset=nominal")
+    sidebar, title = page.locator("#sidebar"), page.locator("#header .app-header .title")
+    expect(sidebar).to_be_visible()
+    page.locator(".amra-present button").click()
+    expect(sidebar).to_be_hidden(timeout=30_000)
+    expect(title).to_have_text("AMRA")
+    for part in (page.locator(".amra-present-gj input"), page.locator(".amra-badge").first):
+        expect(part).to_be_visible(timeout=30_000)
+        box = part.bounding_box()
+        assert box["x"] + box["width"] <= 1280, box
+    shot(page, "c02b-presentation-toggled-1280x720")
+    page.locator(".amra-present button").click()
+    expect(sidebar).to_be_visible(timeout=30_000)
+    expect(title).to_contain_text("aeroelastic model of a rotor in autorotation")
+
+
 def test_the_rotor_drawing_moves_with_the_run(watched_page, dashboard_server):
     page = watched_page
     open_dashboard(page, dashboard_server[0] + "?preset=nominal&run_s=20&speed=1")
