@@ -26,7 +26,9 @@ def tooltip(p: param.Parameter) -> str:
 def check_message(p: param.Parameter, label: str, raw) -> str:
     """Why ``raw`` cannot be the value of ``p`` ('' if it can)."""
     rng = allowed(p)
-    if raw is None or isinstance(raw, bool) or not isinstance(raw, (int, float)):
+    if raw is None:  # the browser sends no value for an empty or non-numeric entry ("abc")
+        return f"{label}: not a number (empty or not numeric); allowed {rng}"
+    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
         return f"{label}: {raw!r} is not a number; allowed {rng}"
     if not math.isfinite(raw):
         return f"{label}: {raw} is not a finite number; allowed {rng}"

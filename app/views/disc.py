@@ -14,9 +14,10 @@ import panel as pn
 from holoviews.streams import Pipe
 
 from ..events import Disc
+from . import Dim
 
-X_DIM = hv.Dimension("x_m", label="x = r cos ψ", unit="m")
-Y_DIM = hv.Dimension("y_m", label="y = r sin ψ", unit="m")
+X_DIM = Dim("x_m", label="x = r cos ψ", unit="m")
+Y_DIM = Dim("y_m", label="y = r sin ψ", unit="m")
 FIELDS = (("torque_per_length_nm_m", "Torque per span", "N m/m", 1.0, "RdBu_r"),
           ("twist_rad", "Elastic twist", "deg", 180.0 / math.pi, "PuOr_r"),
           ("flap_m", "Flap displacement", "mm", 1000.0, "viridis"))
@@ -45,7 +46,7 @@ class DiscView(pn.viewable.Viewer):
 
     def _plot(self, data, field, title, unit, scale, cmap):
         mesh = disc_mesh(data, field, scale)
-        vdim = hv.Dimension(field, label=title, unit=unit)
+        vdim = Dim(field, label=title, unit=unit)
         if mesh is None:
             qm = hv.QuadMesh((np.zeros((2, 2)), np.zeros((2, 2)), np.full((2, 2), np.nan)), [X_DIM, Y_DIM], vdim)
         else:

@@ -10,9 +10,10 @@ from holoviews.streams import Pipe, Stream
 
 from ..compute import FAN_OMEGA_MAX as OMEGA_MAX
 from ..events import Fan, RunStatus
+from . import Dim
 
-OMEGA_DIM = hv.Dimension("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
-F_DIM = hv.Dimension("frequency_hz", label="Natural frequency", unit="Hz")
+OMEGA_DIM = Dim("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
+F_DIM = Dim("frequency_hz", label="Natural frequency", unit="Hz")
 
 Omega = Stream.define("Omega", omega=0.0)
 

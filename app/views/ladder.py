@@ -15,14 +15,14 @@ from amra_core.shapes import FIDELITIES
 from ..compute import ladder_curves
 from ..events import Finished, Ladder
 from ..live import UNITS
-from . import FIDELITY_COLOURS
+from . import FIDELITY_COLOURS, Dim
 
-DIMS = {c: hv.Dimension(c, label=name, unit=unit) for c, (name, unit) in UNITS.items()}
+DIMS = {c: Dim(c, label=name, unit=unit) for c, (name, unit) in UNITS.items()}
 COLOURS = {**FIDELITY_COLOURS, "previous run": "#9e9e9e", "last run": "#1f77b4"}
 COMPARED = ("previous run", "last run")
 #: (curve of app.compute.ladder_curves, y dimension, title) of each plot
 PLOTS = (("omega", DIMS["omega_rad_s"], "Rotor speed"), ("teeter_deg", DIMS["teeter_deg"], "Teeter"),
-         ("twist_deg", DIMS["twist0_deg"], "Tip twist (blade 0)"))
+         ("twist_deg", DIMS["twist0_deg"], "Tip twist, blade 0"))
 
 
 class LadderView(pn.viewable.Viewer):
@@ -68,13 +68,13 @@ class LadderView(pn.viewable.Viewer):
     def __panel__(self):
         def plots(pipe, labels, what):
             return pn.Row(*[pn.pane.HoloViews(hv.DynamicMap(
-                lambda data, p=p: self._plot(data, p[0], p[1], f"{p[2]} {what}", labels), streams=[pipe]),
+                lambda data, p=p: self._plot(data, p[0], p[1], f"{p[2]}{what}", labels), streams=[pipe]),
                 sizing_mode="stretch_width") for p in PLOTS])
         return pn.Column(
             pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"),
-            plots(self.compare_pipe, COMPARED, "previous vs last run"),
+            plots(self.compare_pipe, COMPARED, ": previous vs last"),
             pn.pane.Markdown("### Fidelity ladder: the same case at the three fidelities"),
-            self.info, self.table, plots(self.pipe, FIDELITIES, "by fidelity"), sizing_mode="stretch_width")
+            self.info, self.table, plots(self.pipe, FIDELITIES, " by fidelity"), sizing_mode="stretch_width")
 
 
 def _num(x, unit: str = "") -> str:

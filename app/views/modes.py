@@ -17,13 +17,16 @@ import panel as pn
 from holoviews.streams import Pipe, Stream
 
 from ..events import Locus, ModeFrames, Modes
+from . import Dim
 from .rotor import ModeAnimation
 
 MODE_COLUMNS = ["mode", "frequency [Hz]", "damping ratio [-]", "real part [1/s]", "stable"]
-GJ_DIM = hv.Dimension("gj_nm2", label="GJ", unit="N m²/rad")
-RE_DIM = hv.Dimension("re", label="Real part σ", unit="1/s")
-F_DIM = hv.Dimension("f_hz", label="Frequency", unit="Hz")
-LOG_GJ_DIM = hv.Dimension("log_gj", label="log10 GJ", unit="N m²/rad")
+GJ_DIM = Dim("gj_nm2", label="GJ", unit="N m²/rad")
+RE_DIM = Dim("re", label="Real part σ", unit="1/s")
+F_DIM = Dim("f_hz", label="Frequency", unit="Hz")
+#: GJ ticks [N m²/rad] of the log axis (Bokeh's own put 2000 and 2500 on top of each other)
+GJ_TICKS = [50, 100, 200, 500, 1000, 3000]
+LOG_GJ_DIM = Dim("log_gj", label="log10 GJ", unit="N m²/rad")
 CurrentGJ = Stream.define("CurrentGJ", gj=1500.0)
 
 
@@ -117,7 +120,7 @@ class ModesView(pn.viewable.Viewer):
         return (curve * dots * hv.HLine(0.0).opts(color="black", line_dash="dashed")
                 * hv.VLine(gj).opts(color="red")).opts(
             title="Least-damped mode vs GJ (gaps: no trim)", responsive=True, height=300, show_grid=True,
-            logx=True, legend_position="top_left")
+            logx=True, legend_position="top_left", xticks=GJ_TICKS)
 
     def __panel__(self):
         locus = hv.DynamicMap(self._locus, streams=[self.points_pipe, self.current])

@@ -91,7 +91,7 @@ class RotorDrawing:
         side.legend.location = "top_left"
         side.toolbar.logo = None
         c = 0.8 * chord_m
-        tips = figure(title=f"Tip sections: twist {twist_note}", height=260, width=320,
+        tips = figure(title=f"Tip sections: twist {twist_note}", height=260, width=360,
                       x_range=Range1d(-c, c), y_range=Range1d(-c, c), match_aspect=True, tools="save",
                       x_axis_label="Chordwise, leading edge left [m]", y_axis_label="Up [m]")
         for b, (src, colour) in enumerate(zip(self.sections, BLADE_COLOURS)):
@@ -169,7 +169,7 @@ class ModeAnimation(pn.viewable.Viewer):
     def __init__(self, **params):
         super().__init__(**params)
         self.drawing = RotorDrawing(title="Mode. ", flap_scale=1.0, twist_scale=1.0,
-                                    scales=("scaled to be visible", "scaled to be visible"))
+                                    scales=("not to scale", "not to scale"))
         self.frames = None
         self.player = pn.widgets.Player(start=0, end=23, value=0, loop_policy="loop", interval=80, label="Phase",
                                         show_loop_controls=False, visible=False, css_classes=["amra-mode-player"])

@@ -13,7 +13,7 @@ from app.inputs import checked_input, tooltip
 @pytest.mark.parametrize("name, bad, fragment", [
     ("gj_nm2", 0.0, "GJ [N m²/rad] = 0 is out of range: allowed 10 to 10000"),
     ("gj_nm2", 1e9, "GJ [N m²/rad] = 1e+09 is out of range: allowed 10 to 10000"),
-    ("gj_nm2", None, "GJ [N m²/rad]: None is not a number; allowed 10 to 10000"),
+    ("gj_nm2", None, "GJ [N m²/rad]: not a number (empty or not numeric); allowed 10 to 10000"),
     ("gj_nm2", math.nan, "is not a finite number"),
     ("run_s", -5.0, "Run length [s] = -5 is out of range: allowed 0.5 to 120"),
     ("run_s", 1000.0, "Run length [s] = 1000 is out of range"),
