@@ -69,7 +69,7 @@ class LadderView(pn.viewable.Viewer):
         def plots(pipe, labels, what):
             return pn.Row(*[pn.pane.HoloViews(hv.DynamicMap(
                 lambda data, p=p: self._plot(data, p[0], p[1], f"{p[2]}{what}", labels), streams=[pipe]),
-                sizing_mode="stretch_width") for p in PLOTS])
+                sizing_mode="stretch_width", linked_axes=False) for p in PLOTS])  # each row its own runs
         return pn.Column(
             pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"),
             plots(self.compare_pipe, COMPARED, ": previous vs last"),

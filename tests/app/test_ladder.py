@@ -49,3 +49,18 @@ def test_previous_vs_last_overlay_ranges_over_the_runs():
 def test_verdict_table_precision():
     table = verdict_table([("rigid", "stable", -0.123456789, 12.3456, None, "decays")])
     assert table.iloc[0].tolist() == ["rigid", "stable", "-0.123", "12.3", "—", "decays"]
+
+
+def test_the_two_rows_keep_their_own_axes():
+    """Panel links the axes of HoloViews panes with the same dimensions: the previous-vs-last rotor
+    speed (two runs at 33.9 rad/s) shared its y range with the empty ladder plot below and was drawn
+    on 0-34 rad/s, its curve hidden under the frame."""
+    import panel as pn
+    from bokeh.document import Document
+    from bokeh.models import Plot
+    hv.extension("bokeh")
+    view = LadderView(Session())
+    root = pn.panel(view).get_root(Document())
+    plots = [p for p in root.select({"type": Plot}) if p.title is not None and p.title.text.startswith("Rotor speed")]
+    assert len(plots) == 2
+    assert plots[0].y_range is not plots[1].y_range and plots[0].x_range is not plots[1].x_range
