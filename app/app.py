@@ -108,6 +108,7 @@ class Dashboard(pn.viewable.Viewer):
         c.param.watch(self._on_live, list(LIVE_PARAMETERS))
         c.param.watch(self._on_case, list(CASE_PARAMETERS))
         c.param.watch(lambda e: s.set_speed(e.new), "speed")
+        c.param.watch(self._rotor_needs_its_file, "rotor")
 
     # ------------------------------------------------------------------ messages
     def notify(self, text: str, level: str = "error") -> None:
@@ -200,6 +201,22 @@ class Dashboard(pn.viewable.Viewer):
                     f"GJ, EA and CG", "info")
         return True
 
+    def _rotor_needs_its_file(self, event) -> None:
+        """'uploaded file' chosen (in the select, or by a link's value) with no file uploaded in this
+        session: the rotor stays as it was, and the message says how to get one."""
+        if event.new == UPLOADED and self.uploaded is None:
+            keep = event.old if event.old != UPLOADED else "paper-boundary"
+
+            def revert():  # after this change has reached the widgets (set inside it, the select kept it)
+                self.controls.rotor = keep
+                self.notify(f"no rotor file uploaded in this session: the rotor stays {keep}; upload a TOML "
+                            f"file with 'Rotor file (TOML)' to use your own", "warning")
+            self.session.soon(revert)
+
+    def _chosen_file(self, upload: pn.widgets.FileInput) -> None:
+        """A file was chosen: read it (an empty one arrives as no value, and is named as empty)."""
+        self.upload(upload.value or b"", upload.filename or "upload.toml")
+
     def load_cell(self, cell) -> None:
         gj = float(f"{cell.gj_nm2:.3g}")  # the grid's resolution, not 487.58387005217355
         self.controls.param.update(cg_pct=round(100.0 * cell.cg, 1), gj_nm2=gj)
@@ -242,6 +259,8 @@ class Dashboard(pn.viewable.Viewer):
         self.exports.rename({"modes": names["modes"], "map": names["map"]})
         if self.map is not None:
             self.map.mark(c.cg_pct, c.gj_nm2)
+        if c.rotor == UPLOADED and self.uploaded is None:
+            return  # no case yet: _rotor_needs_its_file puts a rotor back, which refreshes again
         parts = self._parts()
         if parts is None:
             return
@@ -285,8 +304,7 @@ class Dashboard(pn.viewable.Viewer):
                                        styles={"font-size": "90%"})
         upload = pn.widgets.FileInput(accept=".toml", multiple=False, name="Rotor file (TOML)",
                                       sizing_mode="stretch_width", css_classes=["amra-upload"])
-        upload.param.watch(lambda e: e.new is not None and self.upload(e.new, upload.filename or "upload.toml"),
-                           "value")
+        upload.param.watch(lambda *events: self._chosen_file(upload), ["value", "filename"])  # once per choice
 
         def w(cls, name, **kw):  # tooltip: the parameter's doc, unit and allowed range
             tip = {"description": tooltip(c.param[name])} if "description" in cls.param else {}

@@ -179,6 +179,25 @@ def test_uploaded_rotor_is_used(dash):
     assert dash.map_spec().rotor.name == "mccutcheon"
 
 
+def test_uploaded_file_without_a_file_keeps_the_rotor_and_says_why(dash):
+    """Chosen in the select, or applied by a shared link's rotor=uploaded+file (Location.sync sets it
+    after the link's own check refused it), 'uploaded file' without a file left every run failing."""
+    dash.controls.rotor = "mccutcheon"
+    dash.controls.rotor = "uploaded file"
+    assert dash.controls.rotor == "mccutcheon"
+    assert "no rotor file uploaded in this session: the rotor stays mccutcheon" in dash.messages[-1][1]
+    assert dash.start_run()
+    dash.session.stop()
+
+
+def test_an_empty_file_is_named_as_empty(dash):
+    """The browser sends an empty file as no value: only its name changes, and that is read too."""
+    import panel as pn
+    upload = next(o for o in dash.sidebar().select(pn.widgets.FileInput))
+    upload.param.update(filename="empty.toml")
+    assert dash.messages[-1] == ("error", "rotor file 'empty.toml' is empty") and dash.uploaded is None
+
+
 def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
     """No busy indicator (Panel's busy flag is per process), the views' tabs render lazily, and the
     page carries the hooks the browser tests use."""

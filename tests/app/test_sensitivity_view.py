@@ -47,7 +47,7 @@ def test_sensitivity_study_draws_bands_and_exports_its_table(dash, wait):
 
 
 def test_an_invalid_case_is_named_not_studied(dash):
-    dash.controls.rotor = "uploaded file"  # nothing uploaded
+    dash.controls.omega_hold_rad_s = 0.5  # in the widget's bounds, refused by the core
     dash.sensitivity.start()
     assert dash.messages and "cannot study the sensitivity of this case" in dash.messages[-1][1]
     assert dash.sensitivity.result is None and not dash.sensitivity.busy.visible

@@ -109,6 +109,20 @@ def test_presentation_mode_toggled_mid_session_fits_a_projector(watched_page, da
     expect(title).to_contain_text("aeroelastic model of a rotor in autorotation")
 
 
+def test_a_link_with_an_uploaded_rotor_keeps_a_shipped_one(watched_page, dashboard_server):
+    """A link copied after an upload says rotor=uploaded+file: the opener has no file, so the rotor
+    stays a shipped one, in the session and in the select (Location.sync had applied the value the
+    link's check refused, and every run then failed)."""
+    page = watched_page
+    open_dashboard(page, dashboard_server[0] + "?rotor=uploaded+file&gj=800")
+    d = _session(dashboard_server)
+    wait_for(lambda: d.controls.rotor == "paper-boundary", 30, what="the rotor to stay a shipped one")
+    rotor = page.locator("select", has=page.locator("option", has_text="uploaded file")).first
+    expect(rotor).to_have_value("paper-boundary", timeout=30_000)
+    assert d.controls.gj_nm2 == 800.0
+    assert not [m for _, m in d.messages if m.startswith("invalid case")], d.messages
+
+
 def test_the_rotor_drawing_moves_with_the_run(watched_page, dashboard_server):
     page = watched_page
     open_dashboard(page, dashboard_server[0] + "?preset=nominal&run_s=20&speed=1")
