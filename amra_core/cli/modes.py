@@ -9,10 +9,13 @@ from .common import dumps_strict, load_rotor, number, rigid_spring_arg, rotor_ar
 
 def cmd_modes(args):
     from ..modes import modes_report
-    rep = modes_report(load_rotor(args), args.fidelity, args.elements, args.omega, rigid_spring=args.rigid_spring)
+    rotor = load_rotor(args)
+    rep = modes_report(rotor, args.fidelity, args.elements, args.omega, rigid_spring=args.rigid_spring)
     if args.json:
         print(dumps_strict(rep))
     else:
+        print(f"case: {rotor.name}, {args.fidelity}, in vacuo at rotor speed {args.omega:g} rad/s"
+              + (" (per rev: give --omega)" if args.omega == 0 else ""))
         print(f"{'mode':28s} {'f [Hz]':>10s} {'per rev':>8s}")
         for m in rep["modes"]:
             pr = "" if m["per_rev"] is None else f"{m['per_rev']:.3f}"

@@ -12,7 +12,8 @@ def cmd_stability(args):
     from ..stability import analyse
     settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, n_elements=args.elements,
                               rigid_spring=args.rigid_spring)
-    res = analyse(compile_model(load_rotor(args), flight(args), settings))
+    rotor, fl = load_rotor(args), flight(args)
+    res = analyse(compile_model(rotor, fl, settings))
     out = res.to_dict(include_aero_lag=args.all_modes)
     if not res.trim.ok:
         out["reason"] = res.trim.reason
@@ -20,10 +21,22 @@ def cmd_stability(args):
         print(dumps_strict(out))
     else:
         print(f"stable: {out['stable']}  ({out['method']}; trim {res.trim.status})")
+        print(f"case: {case_line(rotor, settings.fidelity, fl, res.trim)}")
+        if not res.trim.ok:
+            print(f"reason: {res.trim.reason}")
         print(f"{'mode':14s} {'f [Hz]':>9s} {'zeta [-]':>9s} {'Re [1/s]':>10s}")
         for m in out["modes"]:
             print(f"{m['label']:14s} {m['frequency_hz']:9.3f} {m['damping_ratio']:9.4f} {m['real_part_per_s']:10.4f}")
     return 0
+
+
+def case_line(rotor, fidelity: str, fl, tr) -> str:
+    """What was analysed, in one line: rotor, fidelity, mean GJ, flight, and the trim it is about."""
+    where = "axial" if fl.is_axial else (f"mu {fl.mu:g}" if fl.mu is not None else f"{fl.airspeed_m_s:g} m/s")
+    line = f"{rotor.name}, {fidelity}, GJ {rotor.stations.mean('gj_nm2'):.4g} N m^2/rad, {where}"
+    if tr.ok:
+        line += f"; trim: rotor speed {tr.omega_rad_s:.2f} rad/s, descent rate {tr.descent_rate_m_s:.2f} m/s"
+    return line
 
 
 def register(sub) -> None:

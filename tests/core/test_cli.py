@@ -259,6 +259,19 @@ def test_stability_human_readable(capsys):
     assert rc == 0
     assert out.startswith("stable: True")
     assert "f [Hz]" in out and "zeta [-]" in out
+    # the case it is about: rotor, fidelity, GJ, flight and the trim
+    assert "case: mccutcheon, rigid, GJ 1471 N m^2/rad, axial; trim: rotor speed" in out
+
+
+def test_stability_without_a_trim_says_why(capsys):
+    rc, out, err = run_cli(capsys, "stability", "--preset", "paper-boundary", "--gj", "100")
+    assert out.startswith("stable: False") and "case: paper-boundary, rigid, GJ 100 N m^2/rad, axial\n" in out
+    assert "reason: no steady autorotation" in out
+
+
+def test_modes_human_readable_names_the_case(capsys):
+    rc, out, err = run_cli(capsys, "modes", "--preset", "mccutcheon", "--fidelity", "rigid")
+    assert rc == 0 and out.startswith("case: mccutcheon, rigid, in vacuo at rotor speed 0 rad/s (per rev: give --omega)")
 
 
 def test_sigterm_after_the_last_cell_still_ends_in_the_report_and_143(capsys, monkeypatch, tmp_path):
