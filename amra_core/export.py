@@ -74,7 +74,9 @@ def case_meta(case, changes: Iterable[str] = (), verdict: str | None = None) -> 
             "ea_pct_chord (span mean)": 100 * float(case.rotor.stations.mean("x_ea")),
             "cg_pct_chord (span mean)": 100 * float(case.rotor.stations.mean("x_cg")),
             "fidelity": se.fidelity, "aero": se.aero, "inflow": se.inflow,
-            "mu": float(fl.mu or 0.0), "airspeed_m_s": float(fl.airspeed_m_s or 0.0),
+            "mu": float(fl.mu or 0.0),
+            # with mu given the airspeed follows the trim (mu Omega R / cos tilt): not 0 m/s
+            "airspeed_m_s": "set by mu at the trim's rotor speed" if fl.mu else float(fl.airspeed_m_s or 0.0),
             "run_s": float(case.t_end_s), "case_key": case.key()}
     for i, text in enumerate(changes):
         meta[f"change {i + 1}"] = text

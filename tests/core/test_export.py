@@ -27,3 +27,16 @@ def test_table_csv_round_trips_with_its_header():
     back = np.genfromtxt(io.StringIO(text), delimiter=",", comments="#", skip_header=4)
     np.testing.assert_allclose(back[0], [0.0, 37.387452, 1e-12])
     assert np.isnan(back[1, 1])
+
+
+def test_a_case_flown_at_an_advance_ratio_does_not_claim_0_m_s():
+    """With mu given the airspeed follows the trim; the header said airspeed_m_s: 0."""
+    from amra_core.export import case_meta
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case
+    rotor = load_preset("mccutcheon")
+    at_mu = case_meta(Case(rotor, FlightCondition(mu=0.1), SolverSettings("rigid")))
+    assert at_mu["mu"] == 0.1 and at_mu["airspeed_m_s"] == "set by mu at the trim's rotor speed"
+    at_speed = case_meta(Case(rotor, FlightCondition(airspeed_m_s=14.0), SolverSettings("rigid")))
+    assert at_speed["mu"] == 0.0 and at_speed["airspeed_m_s"] == 14.0
