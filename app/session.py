@@ -31,6 +31,7 @@ from .events import Applied, Disc, Finished, Notice, Pose, Rows, RunStatus, Star
 TICK_S = 0.06  #: wall-clock period of a chunk [s]
 DELIVERY_PERIOD_S = 0.1  #: shortest interval between deliveries to the views [s]: 10 updates/s
 TRIM_PROGRESS_PERIOD_S = 0.5  #: period of the trim's progress line [s]
+STOPPED_IN_TRIM = "stopped while finding the trimmed autorotation (nothing was run)"  #: the run line then
 VIEWS_PERIOD_S = 1.0  #: wall-clock period of the clock, the "so far" verdict and the disc during a run [s]
 #: share of a core a run's "so far" verdict may take: the verdict reads the whole history (37 ms at
 #: 120 s of a forward-flight run here), so on long runs it comes less often than every VIEWS_PERIOD_S
@@ -236,6 +237,7 @@ class Session:
                 fut, t0 = self.run_pool.submit(new_simulation, case), time.perf_counter()
                 while not fut.done():  # the trim's progress: its time so far, twice a second
                     if stop.wait(TRIM_PROGRESS_PERIOD_S):
+                        post(RunStatus(run_id, "idle", STOPPED_IN_TRIM))
                         return
                     post(RunStatus(run_id, "trimming", f"finding the trimmed autorotation ... "
                                                        f"{time.perf_counter() - t0:.0f} s"))
@@ -247,6 +249,7 @@ class Session:
             post(RunStatus(run_id, "idle", "not started"))
             return
         if stop.is_set():
+            post(RunStatus(run_id, "idle", STOPPED_IN_TRIM))
             return
         self.sim = sim
         gj = float(np.mean(case.rotor.stations.gj_nm2))

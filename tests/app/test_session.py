@@ -125,6 +125,26 @@ def test_the_trim_runs_in_the_run_pool(wait, analysis_pool):
     assert rec.of(Finished)[0].status == "completed" and s.sim is not None
 
 
+def test_a_stop_during_the_trim_says_so(wait):
+    """Stopped while its trim is still computing (a pool whose trim never ends), the run line says it
+    stopped; it said "finding the trimmed autorotation ... 1 s" for ever."""
+    from concurrent.futures import Future
+
+    from app.session import STOPPED_IN_TRIM
+
+    class EndlessTrim:
+        def submit(self, fn, *args):
+            return Future()
+    s = Session(run_pool=EndlessTrim())
+    rec = Recorder(s)
+    s.start(_case(), speed=1.0)
+    run_until(s, lambda: rec.of(RunStatus), wait, what="the trim's status")
+    assert rec.of(RunStatus)[0].text.startswith("finding the trimmed autorotation")
+    s.stop()
+    run_until(s, lambda: rec.of(RunStatus)[-1].text == STOPPED_IN_TRIM, wait, what="the stopped status")
+    assert not rec.of(Finished) and s.sim is None
+
+
 def test_a_long_run_judges_so_far_less_often_than_every_second():
     """The "so far" verdict reads the whole history: it may take VERDICT_CPU_SHARE of a core, so a
     verdict that took 37 ms (a 120 s run) comes every 1.85 s, a quick one every VIEWS_PERIOD_S."""
