@@ -106,6 +106,8 @@ class TrimResult:
         out["mu"] = self.mu
         out["branch"] = self.branch
         out["descent_ratio"] = self.descent_ratio if self.ok else float("nan")
+        if not self.ok:  # no equilibrium: its tilt, airspeed, teeter and twist are not results (not 0)
+            out.update(disk_tilt_rad=None, airspeed_m_s=None, teeter_amplitude_rad=None, tip_twist_rad=None)
         out = {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in out.items()}
         if self.reason:
             out["reason"] = self.reason

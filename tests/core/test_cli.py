@@ -310,3 +310,13 @@ def test_sigterm_after_the_last_cell_still_ends_in_the_report_and_143(capsys, mo
     assert d["cases"] >= 3 and not d["cancelled"]  # every cell was in: the map itself is complete
     assert f"holds {d['cases']} cells" in err
     assert signal.getsignal(signal.SIGTERM) == before  # the command's handler is gone again
+
+
+def test_a_trim_that_finds_no_autorotation_reports_no_equilibrium_values(capsys):
+    """No equilibrium: its tilt, airspeed, teeter and twist are null, not zeros that read as results."""
+    d = cli_json(capsys, "trim", "--preset", "paper-boundary", "--gj", "100")
+    assert d["status"] == "no-autorotation" and d["reason"]
+    for k in ("omega_rad_s", "descent_rate_m_s", "disk_tilt_rad", "airspeed_m_s", "teeter_amplitude_rad",
+              "tip_twist_rad"):
+        assert d[k] is None, (k, d[k])
+    assert d["branch_end"]["gj_mean_nm2"] > 100.0
