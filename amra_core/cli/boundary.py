@@ -220,6 +220,8 @@ def cmd_boundary(args) -> int:
         print(f"GJ in N m^2/rad; fold: no normal autorotation below; flutter: top of the highest strong instability; "
               f"critical: the larger; weak: damping ratio above -{spec.weak_damping:g} and a 20 s run within "
               f"{spec.weak_amplitude_deg:g} deg")
+        print("fold, flutter and critical GJ are the upper ends of their brackets (the safe side); an interval "
+              "ends at the geometric mean of the two GJ values that bracket its edge")
         print(f"{'CG [c]':>8s} {'fold GJ':>9s} {'flutter GJ':>11s} {'critical GJ':>12s} {'bracket':>22s}  status")
 
         def gjs(g):

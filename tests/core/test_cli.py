@@ -320,3 +320,16 @@ def test_a_trim_that_finds_no_autorotation_reports_no_equilibrium_values(capsys)
               "tip_twist_rad"):
         assert d[k] is None, (k, d[k])
     assert d["branch_end"]["gj_mean_nm2"] > 100.0
+
+
+def test_the_boundary_table_says_how_its_gj_values_relate(capsys):
+    """The critical GJ (a bracket's upper end) and an interval's edge (the bracket's geometric mean)
+    differ by design; the table says so (it read as a contradiction: fold 350.2 but stable 347-3000)."""
+    rc, out, err = run_cli(capsys, "boundary", "--preset", "paper-boundary", "--fidelity", "rigid", "--mu", "0",
+                           "--cg", "0.40:0.40:1", "--coarse", "3", "--tol", "0.2", "--gj", "100:1500",
+                           "--workers", "1", "--quiet")
+    assert rc == 0
+    assert "critical GJ are the upper ends of their brackets" in out and "geometric mean" in out
+    row = next(line.split() for line in out.splitlines() if line.strip().startswith("0.400"))
+    bracket_hi = float(row[-3].rstrip("]")) if row[-3].endswith("]") else None
+    assert bracket_hi is not None and float(row[3]) == bracket_hi, row  # critical GJ = the bracket's upper end
