@@ -330,6 +330,20 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
     return v
 
 
+def _failure_explanation(h, cols) -> str:
+    """Why a run is a numerical failure, with the size of its motion before it (dashboard and CLI
+    users have no time-step setting: the advice is for the Python API)."""
+    finite = h[np.isfinite(h).all(axis=1)]
+    why = ("the integration stopped (a non-finite state or an impossible jump of the rotor speed)"
+           + (f" at t = {float(finite[-1, cols['t_s']]):.2f} s" if len(finite) else " at its first step"))
+    twist = [cols[c] for c in ("tip_twist_0_rad", "tip_twist_1_rad") if c in cols]
+    if len(finite) and twist and "teeter_rad" in cols:
+        why += (f". Before it the tip twist reached {math.degrees(float(np.abs(finite[:, twist]).max())):.0f} deg and "
+                f"the teeter {math.degrees(float(np.abs(finite[:, cols['teeter_rad']]).max())):.0f} deg")
+    return (why + ". Too soon to tell a blade motion growing beyond the model's range from a time step too "
+            "long for it (a shorter SolverSettings.dt_s, in the Python API, tells them apart)")
+
+
 def _answer_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,
                            hover_induced_m_s, branch) -> Optional[Verdict]:
     """A run whose integration failed after it had already answered: judged on its finite rows up
@@ -376,8 +390,7 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
                                        hover_induced_m_s, branch)
         if after is not None:
             return after
-        return Verdict("numerical-failure", None, None, None, explanation=("the time step left its stability region (non-finite state or an impossible "
-                                     "jump of the rotor speed): the run was stopped; try a smaller dt_s"))
+        return Verdict("numerical-failure", None, None, None, explanation=_failure_explanation(h, cols))
     t = h[:, cols["t_s"]]
     om = h[:, cols["omega_rad_s"]]
     below = np.nonzero(om < 0.5 * omega_ref)[0]

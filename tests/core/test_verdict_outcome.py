@@ -133,3 +133,18 @@ def test_a_rotor_speed_within_half_a_percent_reads_plus_zero_not_minus_zero():
     """A run that lost 0.3 % of its rotor speed says "+0 % of the start": a rounded change has no sign."""
     v = run_judge(history(lambda t: 0.01 * np.exp(-0.3 * t), omega=lambda t: OM0 * (1.0 - 0.003 * t / 20.0)))
     assert "(+0 % of the start" in v.rotor_speed and "-0 %" not in v.rotor_speed, v.rotor_speed
+
+
+def test_a_numerical_failure_says_how_large_the_motion_was_and_no_unusable_advice():
+    """A failure too soon to judge names the motion before it (tip twist, teeter) and points to the
+    Python API's step for telling a time-step failure from the motion itself: the dashboard and the
+    CLI have no step setting, and "try a smaller dt_s" could not be followed there."""
+    d = history(lambda t: 0.01 * np.exp(-0.3 * t))
+    t = d[:, C["t_s"]]
+    d[:, C["tip_twist_0_rad"]] = np.radians(35.0) * (t >= 0.1)
+    d[t >= 0.2, 1:] = np.nan
+    v = judge(d, HISTORY_COLUMNS, OM0, True, "numerical-failure", True, d[0].copy(), 0.01,
+              hover_induced_m_s=V_H, branch="normal")
+    assert v.verdict == "numerical-failure", v
+    assert "at t = 0.20 s" in v.explanation and "tip twist reached 35 deg" in v.explanation, v.explanation
+    assert "SolverSettings.dt_s" in v.explanation and "try a smaller dt_s" not in v.explanation
