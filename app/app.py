@@ -204,14 +204,18 @@ class Dashboard(pn.viewable.Viewer):
     def _rotor_needs_its_file(self, event) -> None:
         """'uploaded file' chosen (in the select, or by a link's value) with no file uploaded in this
         session: the rotor stays as it was, and the message says how to get one."""
-        if event.new == UPLOADED and self.uploaded is None:
-            keep = event.old if event.old != UPLOADED else "paper-boundary"
+        if self._file_missing(event.new):
+            keep = event.old if event.old != UPLOADED else Controls.param.rotor.default
 
             def revert():  # after this change has reached the widgets (set inside it, the select kept it)
                 self.controls.rotor = keep
                 self.notify(f"no rotor file uploaded in this session: the rotor stays {keep}; upload a TOML "
                             f"file with 'Rotor file (TOML)' to use your own", "warning")
             self.session.soon(revert)
+
+    def _file_missing(self, rotor: str) -> bool:
+        """True for 'uploaded file' while this session has no rotor file."""
+        return rotor == UPLOADED and self.uploaded is None
 
     def _chosen_file(self, upload: pn.widgets.FileInput) -> None:
         """A file was chosen: read it (an empty one arrives as no value, and is named as empty)."""
@@ -259,7 +263,7 @@ class Dashboard(pn.viewable.Viewer):
         self.exports.rename({"modes": names["modes"], "map": names["map"]})
         if self.map is not None:
             self.map.mark(c.cg_pct, c.gj_nm2)
-        if c.rotor == UPLOADED and self.uploaded is None:
+        if self._file_missing(c.rotor):
             return  # no case yet: _rotor_needs_its_file puts a rotor back, which refreshes again
         parts = self._parts()
         if parts is None:
