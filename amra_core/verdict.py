@@ -246,7 +246,15 @@ def _headline(v: "Verdict", t, om, omega_ref: float) -> str:
     return f"rotor speed kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start, {omega_ref:.1f} rad/s)"
 
 
+#: a spectral peak is a frequency only with at least this many cycles in the record: below it the peak
+#: is the record's slow drift (the lowest bins, 1/T), not a resolved oscillation
+MIN_RESOLVED_CYCLES = 2
+
+
 def _dominant_frequency(t, d):
+    """The frequency [Hz] of the largest spectral peak of the deviation with the largest spread, or
+    None when there is no resolved oscillation: fewer than 16 samples, or a peak below
+    :data:`MIN_RESOLVED_CYCLES` cycles per record (a stable 10 s run's slow drift read 0.1 Hz)."""
     ok = np.isfinite(d).all(axis=1)
     t, d = t[ok], d[ok]
     if len(t) < 16:
@@ -257,7 +265,8 @@ def _dominant_frequency(t, d):
     spec = np.abs(np.fft.rfft(x * np.hanning(len(x))))
     f = np.fft.rfftfreq(len(x), dt)
     spec[0] = 0.0
-    return float(f[int(np.argmax(spec))])
+    peak = int(np.argmax(spec))
+    return float(f[peak]) if peak >= MIN_RESOLVED_CYCLES else None
 
 
 def _windmill_brake(h, cols, t, window, v_h):

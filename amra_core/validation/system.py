@@ -109,7 +109,7 @@ def _time_histories(sec: Section, n_el: int, t_end: float) -> None:
             unstable = v.verdict in UNSTABLE
             ok = unstable if expect == "unstable" else v.verdict == "stable"
             gr = "n/a" if v.growth_rate_per_s is None else f"{v.growth_rate_per_s:+.3f} 1/s"
-            fq = "n/a" if v.frequency_hz is None else f"{v.frequency_hz:.2f} Hz"
+            fq = "none resolved" if v.frequency_hz is None else f"{v.frequency_hz:.2f} Hz"
             ct = "" if v.collapse_time_s is None else f"; Ω below 50 % of trim at t = {v.collapse_time_s:.2f} s"
             note = (f"{v.explanation}; growth {gr}, dominant frequency {fq}{ct}. Start: {sim.start_note}. "
                     f"{t_end:g} s simulated, {fid}, {n_el} elements, Theodorsen aerodynamics, "

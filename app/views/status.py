@@ -17,6 +17,14 @@ def _fmt(x, unit, digits=3):
     return "—" if x is None else f"{x:.{digits}g} {unit}"
 
 
+def _frequency(verdict) -> str:
+    """The run's dominant frequency; once the run has a growth rate, a missing one means that no
+    oscillation was resolved (fewer than two cycles of it in the record: a drift, not a mode)."""
+    if verdict.frequency_hz is None and verdict.growth_rate_per_s is not None:
+        return "none resolved (drift, not an oscillation)"
+    return _fmt(verdict.frequency_hz, "Hz")
+
+
 def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", case: str = "") -> str:
     """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet) of the run
     of ``case`` (a one-line description)."""
@@ -32,7 +40,7 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
                                     if isinstance(v, (int, float))) + ")"
     rows = [("Outcome", html.escape(outcome.replace("-", " ") or "—")),
             ("Growth rate", _fmt(verdict.growth_rate_per_s, "1/s")),
-            ("Frequency", _fmt(verdict.frequency_hz, "Hz")),
+            ("Frequency", _frequency(verdict)),
             ("Collapse time (Ω < 50 % of trim)", _fmt(verdict.collapse_time_s, "s")),
             ("Solver status", html.escape(status or "—"))]
     table = "".join(f"<tr><td style='padding-right:12px'>{k}</td><td><b>{v}</b></td></tr>" for k, v in rows)

@@ -56,7 +56,7 @@ def test_nominal_mccutcheon_stable(mccutcheon, fidelity, flight):
     h = sim.history
     print(f"\nMcCutcheon {fidelity} {_flight_id(flight)}: trim omega {sim.trim.omega_rad_s:.3f} rad/s, "
           f"descent {sim.trim.descent_rate_m_s:.3f} m/s | time marching: {v.verdict}, growth "
-          f"{v.growth_rate_per_s:+.4f} 1/s, {v.frequency_hz:.3f} Hz | {res.method}: stable={res.stable}, "
+          f"{v.growth_rate_per_s:+.4f} 1/s, {v.frequency_hz} Hz | {res.method}: stable={res.stable}, "
           f"least damped '{crit.label}' Re {crit.real_part_per_s:+.4f} 1/s at {crit.frequency_hz:.2f} Hz")
     assert sim.status == "finished" and sim.t >= 8.0 - 1e-9
     assert v.verdict == "stable", v.explanation

@@ -54,6 +54,23 @@ def pytest_approx(x, rel):
     return pytest.approx(x, rel=rel)
 
 
+def test_a_drift_is_not_read_as_a_frequency():
+    """A decaying run whose largest deviation is a slow drift (under two cycles in the record) has no
+    resolved frequency: it read 1/T (0.1 Hz over 10 s), the spectrum's lowest bin."""
+    h = history(lambda t: 0.0 * t, t_end=10.0)
+    h[:, C["tip_twist_0_rad"]] = 0.005 * np.exp(-0.5 * h[:, C["t_s"]])  # a slow return to the trim
+    trim_row = h[0].copy()
+    trim_row[C["tip_twist_0_rad"]] = 0.0
+    v = judge(h, HISTORY_COLUMNS, OM0, True, "finished", True, trim_row, 0.01, hover_induced_m_s=V_H, branch="normal")
+    assert v.verdict == "stable" and v.frequency_hz is None, v
+
+
+def test_an_oscillation_of_two_cycles_in_the_record_is_resolved():
+    """The rule is per record: 0.25 Hz over 8 s is 2 cycles, resolved (below the flutter floor)."""
+    v = run_judge(history(lambda t: 0.01 * np.exp(-0.3 * t), t_end=8.0, hz=0.25))
+    assert v.frequency_hz == pytest_approx(0.25, 1e-6), v
+
+
 def test_growing_oscillation_is_a_runaway():
     v = run_judge(history(lambda t: 1e-4 * np.exp(0.3 * t)))
     assert v.verdict == "flutter" and v.outcome == "runaway" and v.growth_rate_per_s > 0.2

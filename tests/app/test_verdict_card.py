@@ -1,0 +1,20 @@
+"""The verdict card says what a missing number means (a stable run's drift has no frequency)."""
+from __future__ import annotations
+
+from amra_core.verdict import Verdict
+from app.views.status import verdict_html
+
+
+def test_a_run_without_a_resolved_oscillation_says_so():
+    html = verdict_html(Verdict("stable", -0.55, None, None, explanation="the perturbation decays"), True)
+    assert "none resolved" in html and "0.1 Hz" not in html
+
+
+def test_a_resolved_frequency_is_shown_with_its_unit():
+    html = verdict_html(Verdict("flutter", 0.4, 12.04, None, explanation="growing oscillation"), True)
+    assert "12 Hz" in html
+
+
+def test_no_data_yet_is_a_dash_not_a_claim():
+    html = verdict_html(Verdict("undetermined", None, None, None, explanation="no data yet"), False)
+    assert "none resolved" not in html and "—" in html
