@@ -23,8 +23,22 @@ def build_parser() -> argparse.ArgumentParser:
     ap.add_argument("--version", action="version", version=f"amra {__version__}")
     sub = ap.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
-        command.register(sub)
+        command.register(_Commands(sub))
     return ap
+
+
+class _Commands:
+    """The sub-command registry handed to each module's ``register``: a command without its own
+    ``description`` gets its one-line ``help`` as one (``amra validate --help`` had none)."""
+
+    def __init__(self, sub):
+        self._sub = sub
+
+    def add_parser(self, name: str, **kw) -> argparse.ArgumentParser:
+        text = kw.get("help") or ""
+        if text and not kw.get("description"):
+            kw["description"] = text[:1].upper() + text[1:].rstrip(".") + "."
+        return self._sub.add_parser(name, **kw)
 
 
 def main(argv=None) -> int:

@@ -298,7 +298,9 @@ def cmd_serve(args):
 
 def register(sub) -> None:
     p = sub.add_parser("serve", help="serve the dashboard (team server; every option also from AMRA_* variables)",
-                       description=__doc__.split("\n\n")[0])
+                       description="Run the dashboard as a (team) server: python -m panel serve app/main.py --setup "
+                                   "app/warmup.py with the options below. Every option can also be set by its AMRA_* "
+                                   "variable; the flag wins over the variable, the variable over the default.")
     p.add_argument("--port", help="port [1, 65535] (AMRA_PORT; default 5006)")
     p.add_argument("--address", help="address to listen on (AMRA_ADDRESS; default 127.0.0.1, 0.0.0.0 for all)")
     p.add_argument("--store", metavar="FILE", help="SQLite result store (AMRA_STORE)")

@@ -17,6 +17,19 @@ def _fmt(x, unit, digits=3):
     return "—" if x is None else f"{x:.{digits}g} {unit}"
 
 
+#: verdicts whose instability is not the fitted oscillation: a negative growth rate there is not a decay
+_NOT_THE_OSCILLATION = ("divergence", "no-autorotation", "overspeed", "windmill-brake")
+
+
+def _growth(verdict) -> str:
+    """The fitted growth rate; on a verdict whose instability is the rotor speed or the descent, a
+    negative one says in place that only the oscillation on top decays (it read as a decay)."""
+    g = verdict.growth_rate_per_s
+    if g is not None and g <= 0.0 and verdict.verdict in _NOT_THE_OSCILLATION:
+        return f"{_fmt(g, '1/s')} (the oscillation on top decays; the {verdict.verdict} is the instability)"
+    return _fmt(g, "1/s")
+
+
 def _frequency(verdict) -> str:
     """The run's dominant frequency; once the run has a growth rate, a missing one means that no
     oscillation was resolved (fewer than two cycles of it in the record: a drift, not a mode)."""
@@ -39,7 +52,7 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
         outcome += " (" + ", ".join(f"{k.replace('_', ' ')} {v:.3g}" for k, v in cycle.items()
                                     if isinstance(v, (int, float))) + ")"
     rows = [("Outcome", html.escape(outcome.replace("-", " ") or "—")),
-            ("Growth rate", _fmt(verdict.growth_rate_per_s, "1/s")),
+            ("Growth rate", _growth(verdict)),
             ("Frequency", _frequency(verdict)),
             ("Collapse time (Ω < 50 % of trim)", _fmt(verdict.collapse_time_s, "s")),
             ("Solver status", html.escape(status or "—"))]

@@ -18,3 +18,11 @@ def test_a_resolved_frequency_is_shown_with_its_unit():
 def test_no_data_yet_is_a_dash_not_a_claim():
     html = verdict_html(Verdict("undetermined", None, None, None, explanation="no data yet"), False)
     assert "none resolved" not in html and "—" in html
+
+
+def test_a_negative_growth_rate_on_an_unstable_verdict_is_not_read_as_a_decay():
+    """fig 12 reads divergence with -0.94 1/s: the rotor speed collapses under a decaying oscillation."""
+    html = verdict_html(Verdict("divergence", -0.94, None, 3.1, explanation="rotor speed collapsed"), True)
+    assert "-0.94 1/s (the oscillation on top decays; the divergence is the instability)" in html
+    stable = verdict_html(Verdict("stable", -0.55, 12.0, None, explanation="the perturbation decays"), True)
+    assert "-0.55 1/s</b>" in stable and "instability" not in stable

@@ -333,3 +333,17 @@ def test_the_boundary_table_says_how_its_gj_values_relate(capsys):
     row = next(line.split() for line in out.splitlines() if line.strip().startswith("0.400"))
     bracket_hi = float(row[-3].rstrip("]")) if row[-3].endswith("]") else None
     assert bracket_hi is not None and float(row[3]) == bracket_hi, row  # critical GJ = the bracket's upper end
+
+
+def test_every_command_describes_itself_in_its_help(capsys):
+    """`amra validate --help` printed its options and no word of what it does; `amra serve --help`
+    showed the reST double backticks of its module docstring."""
+    from amra_core.cli import COMMANDS
+    for module in COMMANDS:
+        name = module.__name__.rsplit(".", 1)[1]
+        with pytest.raises(SystemExit):
+            main([name, "--help"])
+        out = capsys.readouterr().out
+        description = out.split("\n\n")[1]
+        assert not description.startswith("options:") and len(description.split()) >= 4, (name, out[:300])
+        assert "``" not in out, name
