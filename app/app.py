@@ -65,7 +65,10 @@ def case_label(c: Controls, scenario) -> str:
     gj = (f"GJ {NOMINAL_GJ_NM2:g} → {c.gj_nm2:.4g} N m²/rad at {c.soften_at_s:g} s" if scenario.changes
           else f"GJ {c.gj_nm2:.4g} N m²/rad")
     name = PRESETS[c.preset].label if c.preset != "custom" else c.rotor
-    return f"{name} · {c.fidelity} · {gj} · EA {c.ea_pct:g} % · CG {c.cg_pct:g} % · {flight}"
+    # a quantity and its value stay on one line (the card wrapped "μ" and its "0" apart); the line
+    # breaks between the fields
+    fields = [c.fidelity, gj, f"EA {c.ea_pct:g} %", f"CG {c.cg_pct:g} %", flight]
+    return " · ".join([name] + [f.replace(" ", "\u00a0") for f in fields])
 
 
 class Dashboard(pn.viewable.Viewer):

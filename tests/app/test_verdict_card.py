@@ -26,3 +26,14 @@ def test_a_negative_growth_rate_on_an_unstable_verdict_is_not_read_as_a_decay():
     assert "-0.94 1/s (the oscillation on top decays; the divergence is the instability)" in html
     stable = verdict_html(Verdict("stable", -0.55, 12.0, None, explanation="the perturbation decays"), True)
     assert "-0.55 1/s</b>" in stable and "instability" not in stable
+
+
+def test_the_case_line_breaks_between_fields_never_inside_one():
+    """The card's case line wrapped "μ" onto one line and its "0" onto the next."""
+    from app.app import case_label
+    from app.controls import Controls
+    c = Controls()
+    line = case_label(c, c.scenario())
+    fields = line.split(" · ")
+    assert fields[-1] == "μ\u00a00" and f"CG\u00a0{c.cg_pct:g}\u00a0%" in fields
+    assert all(" " not in f for f in fields[1:])  # breakable only at the separators (and in the rotor's name)
