@@ -280,7 +280,9 @@ def apply_query(controls: Controls, query: dict) -> list:
 
 def query_string(controls: Controls) -> str:
     """The URL query for the current values (what a shared link carries)."""
-    return urllib.parse.urlencode({key: getattr(controls, name) for name, key in URL_KEYS.items()})
+    def text(v):  # as Location.sync writes them: booleans true/false, not Python's True/False
+        return str(v).lower() if isinstance(v, bool) else v
+    return urllib.parse.urlencode({key: text(getattr(controls, name)) for name, key in URL_KEYS.items()})
 
 
 def parse_link_query(query: str) -> dict:

@@ -270,7 +270,7 @@ class MapView(pn.viewable.Viewer):
             flutter = fig.add_glyph(self.flutter_sources[fid], Line(**xy, line_color=colour, line_width=2.5,
                                                                     line_dash="dashed"))
             fig.add_glyph(self.flutter_sources[fid], Scatter(**xy, marker="triangle", size=8, **dots))
-            items += [LegendItem(label=f"{fid}: fold", renderers=[fold]),
+            items += [LegendItem(label=f"{fid}: fold (no autorotation below)", renderers=[fold]),
                       LegendItem(label=f"{fid}: strong flutter", renderers=[flutter])]
         sens = fig.add_glyph(self.sens_source, Segment(x0="cg_pct", y0="lo", x1="cg_pct", y1="hi", line_color="#000000",
                                                        line_width=7, line_alpha=0.3))

@@ -84,7 +84,7 @@ def test_fig10_preset_tells_the_papers_story(dash, wait):
     assert v.outcome == "rotor-speed-collapse", v  # no autorotation at GJ 100: the rotor speed is lost
     assert "softened as scripted at t = 2.0" in dash.status.note.value and "GJ 100 N m²/rad" in dash.status.note.value
     assert (dash.live.frame()["gj_nm2"] == 100.0).any() and (dash.live.frame()["gj_nm2"] == 1500.0).any()
-    card = dash.status.card.value  # the card names the case it belongs to
+    card = dash.status.card.value.replace("\u00a0", " ")  # the card names the case it belongs to (a field unbroken)
     assert "Fig. 10: rigid, axial, GJ 100" in card and "GJ 1500 → 100 N m²/rad at 2 s" in card
     marks = dash.live.markers.data  # a vertical marker with the new value in every live plot
     assert list(marks["text"]) == ["GJ 100"] and abs(marks["t_s"][0] - 2.0) < 0.01
@@ -129,7 +129,8 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     assert legends[0] == list(CLASS_COLOURS)  # the same order whatever class a map meets first
     assert "elastic axis (EA)" in legends[1] and legends[1][:4] == ["strong flutter (this map)",
                                                                      "weak window (does not set GJ)",
-                                                                     "rigid: fold", "rigid: strong flutter"]
+                                                                     "rigid: fold (no autorotation below)",
+                                                                     "rigid: strong flutter"]
     dash.refresh_analyses()
     assert 0.40 in dash.map.job.spec.cg_values  # the paper's CG is always a column
     assert dash.map.ea_source.data["x"] == [32.0]  # the EA drawn where it is

@@ -24,6 +24,12 @@ def test_round_trip_reopens_exactly_the_same_case():
     assert b.case() == a.case()
 
 
+def test_a_link_writes_booleans_as_the_url_sync_does():
+    a = Controls()
+    a.present = True
+    assert "present=true" in query_string(a) and "True" not in query_string(a)
+
+
 def test_the_preset_is_applied_first_so_explicit_values_win():
     b = Controls()
     fig10 = PRESETS["fig10"].as_dict()
