@@ -35,7 +35,7 @@ from .views.map import MapView, map_csv
 from .views.modes import ModesView
 from .views.rotor import LiveRotor
 from .views.sensitivity import SensitivityView
-from .views.status import StatusView, run_html
+from .views.status import StatusView, run_html, units_as_shown
 
 TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
 CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
@@ -116,6 +116,7 @@ class Dashboard(pn.viewable.Viewer):
     # ------------------------------------------------------------------ messages
     def notify(self, text: str, level: str = "error") -> None:
         """A visible message: the alert pane (the last three messages, until Reset) and a toast."""
+        text = units_as_shown(text)
         self.messages.append((level, text))
         self.alert.alert_type = {"error": "danger", "warning": "warning", "info": "info"}.get(level, "danger")
         self.alert.object = "\n\n".join(f"**{lv}:** {t}" for lv, t in self.messages[-3:])

@@ -13,6 +13,11 @@ COLOURS = {"stable": "#2e7d32", "flutter": "#c62828", "divergence": "#ef6c00", "
            "no-autorotation": "#5d4037", "numerical-failure": "#424242"}
 
 
+def units_as_shown(text: str) -> str:
+    """The solver's plain-text units as the page writes them (N m^2/rad -> N m²/rad)."""
+    return text.replace("m^2", "m²")
+
+
 def _fmt(x, unit, digits=3):
     return "—" if x is None else f"{x:.{digits}g} {unit}"
 
@@ -64,7 +69,7 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
             f"<span style='font-size:70%;color:#555'>({state})</span></div>"
             f"<div class='amra-verdict-case' style='font-size:85%;color:#555'>{html.escape(case)}</div>"
             f"<div class='amra-rotor-speed'><b>{html.escape(getattr(verdict, 'rotor_speed', '') or '')}</b></div>"
-            f"<div>{html.escape(verdict.explanation)}</div><table>{table}</table>{note}</div>")
+            f"<div>{html.escape(units_as_shown(verdict.explanation))}</div><table>{table}</table>{note}</div>")
 
 
 def badge_html(verdict, final: bool) -> str:

@@ -37,3 +37,8 @@ def test_the_case_line_breaks_between_fields_never_inside_one():
     fields = line.split(" · ")
     assert fields[-1] == "μ\u00a00" and f"CG\u00a0{c.cg_pct:g}\u00a0%" in fields
     assert all(" " not in f for f in fields[1:])  # breakable only at the separators (and in the rotor's name)
+
+
+def test_the_solvers_units_are_written_as_the_page_writes_them():
+    html = verdict_html(Verdict("divergence", 0.1, None, 3.0, explanation="since the change to GJ 300 N m^2/rad"), True)
+    assert "GJ 300 N m²/rad" in html and "m^2" not in html
