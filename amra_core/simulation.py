@@ -36,6 +36,9 @@ T_END_MAX_S = 600.0  #: longest run [s] (as ``amra simulate --t-end``): 240 000 
 #: allocates its history and full states up front (rows x (16 + n_y) floats, ~40 MB for the
 #: fem-coupled state), so a UI stays responsive and a mistyped span cannot exhaust memory
 MAX_CHUNK_ROWS = 40_000
+#: a span within this fraction of a step above a whole number of steps is that number (float sums of
+#: steps, see Simulation.advance)
+SPAN_ROUNDING_STEPS = 1e-9
 #: states that end a run; ``finished`` (t_end reached by :meth:`Simulation.run`) can be continued
 #: ``not-started``: no trimmed state and no branch end existed (the verdict is ``no-autorotation``)
 TERMINAL_STATUSES = ("numerical-failure", "rotor-stopped", "overspeed-stop", "not-started")
@@ -176,7 +179,10 @@ class Simulation:
             n_steps = int(n_steps)
         elif span_s is not None:
             _positive("span_s", span_s, MAX_CHUNK_ROWS * self.record_interval_s * (1 + 1e-9), why)
-            n_steps = min(int(math.ceil(span_s / self.dt)), max_steps)
+            # a span that is a whole number of steps up to rounding (a chunk ending at a scripted change,
+            # after times summed in other chunks) is that number, not one more: the change at 2 s of a
+            # forward-flight preset landed at 2.002 s at one playback speed and at 2.000 s at another
+            n_steps = min(max(1, int(math.ceil(span_s / self.dt - SPAN_ROUNDING_STEPS))), max_steps)
         else:
             n_steps = self.record_every
         if self.status in TERMINAL_STATUSES:

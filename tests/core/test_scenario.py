@@ -67,6 +67,38 @@ def test_a_scenario_is_the_same_run_as_a_live_change_by_hand(short_case):
     assert scripted.case.rotor.stations.gj_nm2[0] == 200.0
 
 
+@pytest.fixture(scope="module")
+def forward_case(paper):
+    """Fig. 12's case, to just after its softening at 2 s (mu 0.1: the 2 ms step of a kicked run)."""
+    return Case(paper.with_overrides(gj_nm2=1500.0, x_ea=0.32, x_cg=0.40), FlightCondition(mu=0.1),
+                SolverSettings(fidelity="rigid"), t_end_s=2.1)
+
+
+@pytest.mark.parametrize("chunk_s", [0.06, 0.07, 0.24, 1.2])
+def test_a_change_lands_at_its_time_whatever_the_chunks(forward_case, chunk_s):
+    """The dashboard marches in chunks of playback speed x 60 ms and ends a chunk at each scripted
+    change. A span that is a whole number of steps up to the rounding of the summed times took one
+    step more: Fig. 12's softening at 2 s landed at 2.002 s at playback 4x, and its verdict changed
+    with the playback speed (growth -0.83 instead of -0.94 1/s)."""
+    scenario = Scenario(forward_case, (LiveChange(2.0, gj_nm2=300.0),))
+    reference = run_scenario(scenario)
+    sim = Simulation(forward_case, trim_result=reference.trim)
+    t_end = forward_case.t_end_s
+    while sim.status == "running" or sim.status == "not-started" or sim.t < t_end - 1e-9:
+        t_before, t_next = sim.t, scenario.next_change_s(sim.t) or t_end
+        sim.advance(span_s=max(min(chunk_s, t_end - sim.t, t_next - sim.t), 1e-6))
+        for change in scenario.due(t_before, sim.t):
+            sim.set_parameters(gj_nm2=change.gj_nm2)
+        if sim.t >= t_end - 1e-9:
+            break
+    (_, t_change, _), = sim.changes
+    (_, t_reference, _), = reference.changes  # the first recording instant at or after 0.3 s
+    assert abs(t_change - t_reference) < 1e-9 and 2.0 <= t_reference + 1e-9 < 2.0 + reference.record_interval_s
+    np.testing.assert_array_equal(sim.y, reference.y)
+    np.testing.assert_array_equal(sim.history[:, 1:], reference.history[:, 1:])
+    np.testing.assert_allclose(sim.history[:, 0], reference.history[:, 0], rtol=0, atol=1e-12)  # times summed apart
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("key", sorted(PAPER_CASES))
 def test_each_paper_case_collapses_the_rotor_speed_after_the_softening(key):
