@@ -40,6 +40,14 @@ VERDICT_CPU_SHARE = 0.02
 log = logging.getLogger("amra.session")
 
 
+def end_status(sim: Simulation, stopped: bool) -> str:
+    """The solver status of a run that ended: ``completed`` when it reached its end, ``stopped`` when
+    the user stopped it first (it read "completed" at t = 6 s of a 20 s run), else the solver's own."""
+    if sim.status != "running":
+        return sim.status
+    return "stopped" if stopped and sim.t < sim.case.t_end_s - 1e-9 else "completed"
+
+
 def next_verdict_in_s(cost_s: float) -> float:
     """Wall time [s] until the next "so far" verdict of a run whose last one took ``cost_s`` [s]."""
     return max(VIEWS_PERIOD_S, cost_s / VERDICT_CPU_SHARE)
@@ -292,16 +300,18 @@ class Session:
                     next_tick = time.perf_counter()  # the solver is behind the playback speed
         except Exception as exc:  # noqa: BLE001
             post(Notice(f"the run failed at t = {sim.t:.2f} s: {exc}"))
-        self._post_views(sim, run_id, final=True)
-        status = "completed" if sim.status == "running" else sim.status
+        self._post_views(sim, run_id, final=True, stopped=stop.is_set())
+        status = end_status(sim, stop.is_set())
         post(Finished(run_id, sim.history, status, stop.is_set(), sim.t))
         log.info("run %d ended at t = %.2f s (%s%s)", run_id, sim.t, status, ", stopped" if stop.is_set() else "")
-        post(RunStatus(run_id, "idle", f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s "
-                                       f"({status})", float(sim.y[Y_OMEGA]) if len(sim.history) else None))
+        line = (f"stopped at t = {sim.t:.2f} s of {t_end:g} s" if status == "stopped" else
+                f"{'stopped' if stop.is_set() else 'finished'} at t = {sim.t:.2f} s ({status})")
+        post(RunStatus(run_id, "idle", line, float(sim.y[Y_OMEGA]) if len(sim.history) else None))
 
-    def _post_views(self, sim: Simulation, run_id: int, final: bool, verdict: bool = True) -> Optional[float]:
+    def _post_views(self, sim: Simulation, run_id: int, final: bool, verdict: bool = True,
+                    stopped: bool = False) -> Optional[float]:
         """Post the verdict (if ``verdict``) and the disc; returns the verdict's time [s], or None."""
-        status = ("completed" if sim.status == "running" else sim.status) if final else sim.status
+        status = end_status(sim, stopped) if final else sim.status
         cost_s = None
         if verdict:
             t0 = time.perf_counter()

@@ -107,6 +107,23 @@ def test_a_live_change_continues_the_run_with_the_new_gj(wait):
     s.stop()
 
 
+def test_a_run_stopped_before_its_end_says_stopped_not_completed(wait):
+    """A 20 s run stopped at a few seconds read "stopped at t = 6.19 s (completed)" and its card's
+    solver status "completed"."""
+    s = Session()
+    rec = Recorder(s)
+    s.start(_case(run_s=20.0), speed=1.0)
+    run_until(s, lambda: rec.of(Rows) and rec.of(Rows)[-1].t_s > 0.3, wait, what="0.3 s of run")
+    s.stop()
+    run_until(s, lambda: rec.of(Finished), wait, what="the stopped run to end")
+    fin = rec.of(Finished)[0]
+    assert fin.stopped and fin.status == "stopped" and fin.t_s < 20.0
+    finals = [v for v in rec.of(VerdictNews) if v.final]
+    assert finals and finals[-1].status == "stopped"
+    line = rec.of(RunStatus)[-1].text
+    assert line.startswith("stopped at t = ") and line.endswith(" of 20 s") and "completed" not in line
+
+
 def test_a_run_that_fails_to_start_says_why(wait):
     from app.events import Notice
     s = Session()
