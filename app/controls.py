@@ -300,16 +300,23 @@ def apply_session_query(controls: Controls, notify) -> None:
         notify(msg)
 
 
-def sync_url(controls: Controls) -> None:
-    """After the page has loaded: mirror every control in the URL (``pn.state.location.sync``)."""
+def sync_url(controls: Controls, location=None) -> None:
+    """After the page has loaded: mirror every control in the URL (``pn.state.location.sync``, or
+    ``location``'s)."""
     import panel as pn
-    if pn.state.location is not None:
-        # every value but the preset: Location.sync applies the link's values in one batch, after
-        # which the preset's watcher would overwrite the edits (?preset=nominal&gj=100 opened at
-        # GJ 1500); the values alone reproduce the case, and a link's preset was applied first
-        # by apply_session_query (whose messages name any bad value, so none are repeated here)
-        pn.state.location.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"},
-                               on_error=lambda bad: None)
+    loc = pn.state.location if location is None else location
+    if loc is None:
+        return
+    # every value but the preset both ways: Location.sync applies the link's values in one batch,
+    # after which the preset's watcher would overwrite the edits (?preset=nominal&gj=100 opened at
+    # GJ 1500); a link's preset was applied first by apply_session_query (whose messages name any
+    # bad value, so none are repeated here)
+    loc.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"}, on_error=lambda bad: None)
+
+    def write_preset(*_):  # the preset one way only: a copied link reopens as the preset it shows
+        loc.update_query(preset=controls.preset)  # (it kept the opening link's preset=fig10 after
+    controls.param.watch(write_preset, list(URL_KEYS))  # Fig. 12 was chosen, and opened as custom)
+    write_preset()
 
 
 # ---------------------------------------------------------------------------------------- rotor files

@@ -50,3 +50,21 @@ def test_bad_values_are_reported_by_name_and_ignored():
     assert "allowed 10 to 10000" in joined and "rigid, fem-torsion, fem-coupled" in joined
     assert b.ea_pct == 30.0  # the good one is applied
     assert b.gj_nm2 == 1500.0 and b.cg_pct == 40.0 and b.mu == 0.0 and math.isfinite(b.mu)
+
+
+def test_a_copied_link_reopens_as_the_preset_it_shows():
+    """Opened as ?preset=fig10, then Fig. 12 chosen: the URL kept preset=fig10 beside Fig. 12's values,
+    and the copied link opened as a custom case without the paper's card."""
+    from panel.io.location import Location
+    from app.controls import sync_url
+    opened = Controls()
+    assert apply_query(opened, {"preset": "fig10"}) == []
+    loc = Location(search="?preset=fig10")
+    sync_url(opened, loc)
+    opened.preset = "fig12"
+    assert loc.query_params["preset"] == "fig12"
+    reopened = Controls()
+    assert apply_query(reopened, {k: str(v) for k, v in loc.query_params.items()}) == []
+    assert reopened.preset == "fig12" and reopened.values() == opened.values()
+    opened.gj_nm2 = 333.0  # an edit leaves the preset: the link says custom, with every value
+    assert loc.query_params["preset"] == "custom" and loc.query_params["gj"] == 333.0
