@@ -13,6 +13,7 @@ import math
 import urllib.parse
 from dataclasses import dataclass
 from types import MappingProxyType
+from typing import Optional
 
 import param
 
@@ -272,10 +273,34 @@ def apply_query(controls: Controls, query: dict) -> list:
         except Exception as exc:  # noqa: BLE001 - every bad value becomes a message
             rng = allowed(p)
             rng = f" (allowed{'' if isinstance(p, param.Number) else ':'} {rng})" if rng else ""
-            why = str(exc).split("\n")[0]
-            errors.append(f"link parameter {key} = {raw!r} was ignored{rng}: "
-                          f"{why if len(why) < 200 else why[:200] + ' ...'}")
+            why = _why_not(p, raw)
+            if why is None:  # the value's own reason (an uploaded rotor in a link)
+                why, rng = str(exc).split("\n")[0][:200], ""
+            errors.append(f"link parameter {key} = {raw!r} was ignored: {why}{rng}")
     return errors
+
+
+def _why_not(p: param.Parameter, raw) -> Optional[str]:
+    """Why a link's value for ``p`` was refused, in the inputs' words (param's own message named
+    internals: "Number parameter 'Controls.run_s' must be at most 120.0, not 1000000000.0."); None
+    when the value is of the right kind and in range (then the refusal has its own reason)."""
+    if isinstance(p, param.Boolean):
+        return "not true or false"
+    if isinstance(p, param.Selector) and str(raw) not in [str(v) for v in p.get_range().values()]:
+        return "not one of the choices"
+    if isinstance(p, param.Number):
+        try:
+            x = float(raw)
+        except (TypeError, ValueError):
+            return "not a number"
+        if not math.isfinite(x):
+            return "not a finite number"
+        if isinstance(p, param.Integer) and not x.is_integer():
+            return "not an integer"
+        lo, hi = p.bounds or (None, None)
+        if (lo is not None and x < lo) or (hi is not None and x > hi):
+            return "out of range"
+    return None
 
 
 def query_string(controls: Controls) -> str:
@@ -296,8 +321,16 @@ def apply_session_query(controls: Controls, notify) -> None:
     args = pn.state.session_args or {}
     raw = {k: v[-1].decode("utf-8", "replace") if isinstance(v[-1], bytes) else str(v[-1])
            for k, v in args.items() if v}
-    for msg in apply_query(controls, raw):
-        notify(msg)
+    report_link_errors(apply_query(controls, raw), notify)
+
+
+def report_link_errors(msgs: list, notify) -> None:
+    """One message for a link's refused values, naming every one (the alert shows the last three
+    messages: a link with seven bad values showed three, the rest only in passing toasts)."""
+    if len(msgs) == 1:
+        notify(msgs[0])
+    elif msgs:
+        notify(f"{len(msgs)} values of this link were ignored:\n\n" + "\n".join(f"- {m}" for m in msgs))
 
 
 def sync_url(controls: Controls, location=None) -> None:

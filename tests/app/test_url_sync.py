@@ -68,3 +68,20 @@ def test_a_copied_link_reopens_as_the_preset_it_shows():
     assert reopened.preset == "fig12" and reopened.values() == opened.values()
     opened.gj_nm2 = 333.0  # an edit leaves the preset: the link says custom, with every value
     assert loc.query_params["preset"] == "custom" and loc.query_params["gj"] == 333.0
+
+
+def test_a_links_bad_values_are_named_in_the_inputs_words_in_one_message():
+    """param's own text leaked ("Number parameter 'Controls.run_s' must be at most 120.0, not
+    1000000000.0."), and with seven bad values the alert kept only the last three messages."""
+    from app.controls import report_link_errors
+    msgs = apply_query(Controls(), {"gj": "abc", "cg": "95", "mu": "-1", "fidelity": "fem", "present": "maybe",
+                                    "run_s": "1e9", "map_columns": "2.5"})
+    assert len(msgs) == 7
+    assert not any("parameter '" in m or "Controls." in m for m in msgs), msgs
+    assert "link parameter run_s = '1e9' was ignored: out of range (allowed 0.5 to 120)" in msgs
+    assert "link parameter gj = 'abc' was ignored: not a number (allowed 10 to 10000)" in msgs
+    assert "link parameter map_columns = '2.5' was ignored: not an integer (allowed 2 to 31)" in msgs
+    shown = []
+    report_link_errors(msgs, shown.append)
+    assert len(shown) == 1 and shown[0].startswith("7 values of this link were ignored")
+    assert all(m in shown[0] for m in msgs)
