@@ -235,6 +235,7 @@ class Simulation:
         inflow states copied), and the stable time
         step is recomputed for the new stiffness (the recording interval is kept, so the history
         stays uniformly sampled). A rejected value leaves the run unchanged."""
+        before = self.case.rotor.stations
         rotor = self.case.rotor.with_overrides(gj_nm2=gj_nm2, x_ea=x_ea, x_cg=x_cg)
         new = _with_controls_of(compile_model(rotor, self.case.flight, self.case.settings), self.model)
         if self.status == "not-started":  # nothing runs: only the description changes
@@ -247,8 +248,14 @@ class Simulation:
         self.case = replace(self.case, rotor=rotor)
         self.model, self.y, self.dt, self.record_every = new, y, dt, every
         if self._chunks:  # the verdict now judges the motion since this change (verdict())
-            parts = [f"GJ {gj_nm2:.4g} N m^2/rad"] if gj_nm2 is not None else []
-            parts += [f"{name} {100 * v:.1f} % chord" for name, v in (("EA", x_ea), ("CG", x_cg)) if v is not None]
+            # what changed (a dashboard sends GJ, EA and CG together: "the change to GJ 300 N m^2/rad,
+            # EA 32.0 % chord, CG 40.0 % chord" named two values that had not moved)
+            def moved(v, old):
+                return v is not None and not all(x == float(v) for x in old)
+            parts = [f"GJ {gj_nm2:.4g} N m^2/rad"] if moved(gj_nm2, before.gj_nm2) else []
+            parts += [f"{name} {100 * v:.1f} % chord" for name, v, old in (("EA", x_ea, before.x_ea),
+                                                                           ("CG", x_cg, before.x_cg)) if moved(v, old)]
+            parts = parts or ["the same values"]
             what = f"the change to {', '.join(parts)} at t = {self.t:.2f} s"
             self.changes.append((sum(len(c) for c in self._chunks), self.t, what))
 

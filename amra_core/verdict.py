@@ -64,6 +64,7 @@ STABLE_MIN_FIT_S = math.log(1.1) / GROWTH_THRESHOLD_PER_S
 #: with at least a tenth of the starting envelope left it is a bounded oscillation (limit cycle)
 SUSTAINED_SLOPE_PER_S = -0.25 * GROWTH_THRESHOLD_PER_S
 SUSTAINED_FRACTION = 0.1
+DECAYED_FROM_START = "the rotor speed decayed from the start"  #: said of an untrimmed run's collapse
 OUTCOMES = ("decays", "bounded-oscillation", "rotor-speed-collapse", "runaway", "undetermined")
 
 
@@ -415,7 +416,7 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
     if collapse is not None or status == "rotor-stopped":
         grew = growth is not None and growth > GROWTH_THRESHOLD_PER_S and oscill
         if not trimmed:  # the headline: no equilibrium, the rotor speed is lost (an oscillation on the way is told)
-            why = "no torque equilibrium exists: the rotor speed decayed from the start"
+            why = f"no torque equilibrium exists: {DECAYED_FROM_START}"
             if grew:
                 why += f" (a coupled oscillation at {freq:.1f} Hz grew on the way, {growth:+.2f} 1/s)"
             return Verdict("no-autorotation", growth, freq, collapse, amp_end, why, "rotor-speed-collapse")
@@ -544,5 +545,6 @@ def judge_after_change(history: np.ndarray, columns, change_row: int, change: st
         scale = perturbation_scale
         about = "" if trimmed else "no steady autorotation exists for the new values; "
     v = judge(sub, columns, om_ref, axial, status, trimmed, ref, scale, hover_induced_m_s)
-    v.explanation = head + about + v.explanation
+    # the judged motion starts at the change, not at the run's start (the rotor speed had been steady)
+    v.explanation = head + about + v.explanation.replace(DECAYED_FROM_START, "the rotor speed decayed from the change on")
     return v

@@ -20,7 +20,7 @@ from amra_core.shapes import FIDELITIES
 from amra_core.verdict import teeter_amplitude_rad
 
 from . import compute, exports
-from .controls import LIVE_PARAMETERS, PRESETS, UPLOADED, Controls, UploadError, parse_rotor_upload
+from .controls import LIVE_PARAMETERS, LIVE_VALUE_OF, PRESETS, UPLOADED, Controls, UploadError, parse_rotor_upload
 from .events import Applied, Fan, Finished, Ladder, Locus, ModeFrames, Modes, Notice, Rows
 from .inputs import checked_input, gj_slider, tooltip
 from .live import LivePlots, columns_from_rows
@@ -234,11 +234,12 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ parameter changes
     def _on_live(self, *events) -> None:
-        if self.session.running:
-            self.session.set_live(**self.controls.live_values())
-            c = self.controls
-            self.status.note.value = (f"applied live at the next chunk: GJ {c.gj_nm2:.4g} N m²/rad, "
-                                       f"EA {c.ea_pct:g} %, CG {c.cg_pct:g} %")
+        if self.session.running:  # only what moved (the card named EA and CG changes nobody made)
+            moved = {LIVE_VALUE_OF[e.name] for e in events if e.name in LIVE_VALUE_OF}
+            values = {k: v for k, v in self.controls.live_values().items() if k in moved}
+            if values:
+                self.session.set_live(**values)
+                self.status.note.value = f"applied live at the next chunk: {Applied(0, values, 0.0).text(', ', True)}"
 
     def _on_case(self, *events) -> None:
         if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):

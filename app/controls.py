@@ -27,6 +27,8 @@ from amra_core.simulation import Case
 
 UPLOADED = "uploaded file"
 LIVE_PARAMETERS = ("gj_nm2", "ea_pct", "cg_pct")  #: changed mid-run without restarting
+#: each live control's key in :meth:`Controls.live_values` (the units of Simulation.set_parameters)
+LIVE_VALUE_OF = {"gj_nm2": "gj_nm2", "ea_pct": "x_ea", "cg_pct": "x_cg"}
 GJ_BOUNDS = (10.0, 10000.0)
 
 
@@ -271,7 +273,7 @@ def apply_query(controls: Controls, query: dict) -> list:
                 raise ValueError("an uploaded rotor cannot be shared by link (upload the file again)")
             controls.param.update({name: value})
         except Exception as exc:  # noqa: BLE001 - every bad value becomes a message
-            rng = allowed(p)
+            rng = "" if isinstance(p, param.Boolean) else allowed(p)  # (a boolean's reason says it)
             rng = f" (allowed{'' if isinstance(p, param.Number) else ':'} {rng})" if rng else ""
             why = _why_not(p, raw)
             if why is None:  # the value's own reason (an uploaded rotor in a link)

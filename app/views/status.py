@@ -110,12 +110,14 @@ class StatusView(pn.viewable.Viewer):
         self.verdict = None
         self.notify = notify
         self.case = ""  #: the case of the run the card speaks of (set when a run starts)
+        self.case_at_start = ""  #: ... as it started (before any live change)
         session.subscribe(RunStatus, lambda ev: setattr(self.run, "value", run_html(ev.text)))
         session.subscribe(Started, self._started)
         session.subscribe(VerdictNews, lambda ev: self.show(ev.verdict, ev.final, ev.status, ev.start_note))
         session.subscribe(Applied, self._applied)
 
     def _started(self, ev: Started) -> None:
+        self.case_at_start = self.case
         self.show(None, False)
         if ev.start_note.startswith("no steady"):
             self.notify(f"no trim exists for this case: {ev.start_note}", "warning")
@@ -123,6 +125,8 @@ class StatusView(pn.viewable.Viewer):
     def _applied(self, ev: Applied) -> None:
         how = "softened as scripted" if ev.values.get("scripted") else "applied live"
         self.note.value = f"{how} at t = {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
+        if not ev.values.get("scripted"):  # the card's case: the run's start, then the last live change
+            self.case = f"{self.case_at_start} · live at {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict

@@ -53,6 +53,24 @@ def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
     assert not dash.session.running
 
 
+def test_a_live_gj_change_is_told_as_what_moved(dash, wait):
+    """After GJ alone was moved mid-run, the card's case line still read GJ 1500, and the verdict said
+    "since the change to GJ 300 N m^2/rad, EA 32.0 % chord, CG 40.0 % chord" (EA and CG had not moved)
+    and that "the rotor speed decayed from the start" (it had been steady until the change)."""
+    dash.controls.param.update(run_s=3.0, speed=4.0)
+    dash.start_run()
+    pump_until(dash, lambda: len(dash.live.frame()) and dash.live.frame()["t_s"].iloc[-1] > 0.5,
+               wait, what="0.5 s of run")
+    dash.controls.gj_nm2 = 100.0
+    assert dash.status.note.value == "applied live at the next chunk: GJ 100 N m²/rad"
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the run's end")
+    card = dash.status.card.value.replace("\u00a0", " ")
+    assert "GJ 1500 N m²/rad" in card and "· live at " in card and ": GJ 100 N m²/rad" in card
+    assert "since the change to GJ 100 N m²/rad at t = " in card
+    assert "EA 32.0 % chord" not in card and "CG 40.0 % chord" not in card
+    assert "decayed from the start" not in dash.status.verdict.explanation
+
+
 def test_close_stops_the_worker_and_releases_the_map(dash, wait):
     dash.controls.param.update(run_s=30.0, speed=1.0)
     dash.refresh_analyses()

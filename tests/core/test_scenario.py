@@ -151,3 +151,13 @@ def test_cli_change_at_reports_the_change(capsys):
     assert got["changes"] == ["at t = 0.2 s: GJ 300 N m²/rad"]
     assert got["sim_time_s"] == pytest.approx(0.4, abs=0.003)
     assert "paper_case" not in got
+
+
+def test_a_change_names_only_the_values_that_moved(short_case):
+    """A dashboard sends GJ, EA and CG together; the verdict named EA and CG changes nobody made."""
+    sim = Simulation(short_case)
+    sim.run(t_end_s=0.1)
+    sim.set_parameters(gj_nm2=700.0, x_ea=0.32, x_cg=0.40)
+    assert sim.changes[-1][2].startswith("the change to GJ 700 N m^2/rad at t = ")
+    sim.set_parameters(gj_nm2=700.0, x_cg=0.38)
+    assert sim.changes[-1][2].startswith("the change to CG 38.0 % chord at t = ")
