@@ -90,6 +90,7 @@ class Dashboard(pn.viewable.Viewer):
         self.modes.on_pick = self.animate_mode
         self.map = MapView(s, registry, who=id(self), on_pick=self.load_cell) if registry is not None else None
         self.uploaded = None
+        self.uploaded_name = ""  #: the file the uploaded rotor came from
         self.sensitivity = (SensitivityView(s, self._sensitivity_case, self.tasks.submit, self.map.show_sensitivity,
                                             self.notify) if self.map is not None else None)
         if self.sensitivity is not None:  # its text changes: on the event loop, with the lock
@@ -190,10 +191,12 @@ class Dashboard(pn.viewable.Viewer):
     def upload(self, data: bytes, filename: str) -> bool:
         try:
             rotor = parse_rotor_upload(data, filename)
-        except UploadError as exc:
-            self.notify(str(exc))
+        except UploadError as exc:  # says what stays in use (a failed upload left "uploaded file" shown)
+            stays = (f"the rotor stays the earlier file {self.uploaded_name!r}" if self.controls.rotor == UPLOADED
+                     and self.uploaded is not None else f"the rotor stays {self.controls.rotor}")
+            self.notify(f"{exc}; {stays}")
             return False
-        self.uploaded = rotor
+        self.uploaded, self.uploaded_name = rotor, filename
         if self.controls.rotor == UPLOADED:
             self.refresh.kick()
         else:

@@ -198,6 +198,21 @@ def test_uploaded_rotor_is_used(dash):
     assert dash.map_spec().rotor.name == "mccutcheon"
 
 
+def test_a_failed_upload_says_which_rotor_stays_in_use(dash):
+    """After a good file, a broken one left the select on "uploaded file" with nothing saying that the
+    earlier file was still the rotor."""
+    from pathlib import Path
+    good = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
+    assert dash.upload(good, "good.toml")
+    assert not dash.upload(b"radius_m = [", "broken.toml")
+    assert dash.messages[-1][0] == "error" and "'broken.toml'" in dash.messages[-1][1]
+    assert dash.messages[-1][1].endswith("; the rotor stays the earlier file 'good.toml'")
+    assert dash.controls.rotor == "uploaded file" and dash.uploaded.name == "mccutcheon"
+    dash.controls.rotor = "paper-boundary"
+    assert not dash.upload(b"\x00\x01", "binary.toml")
+    assert dash.messages[-1][1].endswith("; the rotor stays paper-boundary")
+
+
 def test_uploaded_file_without_a_file_keeps_the_rotor_and_says_why(dash):
     """Chosen in the select, or applied by a shared link's rotor=uploaded+file (Location.sync sets it
     after the link's own check refused it), 'uploaded file' without a file left every run failing."""
@@ -214,7 +229,8 @@ def test_an_empty_file_is_named_as_empty(dash):
     import panel as pn
     upload = next(o for o in dash.sidebar().select(pn.widgets.FileInput))
     upload.param.update(filename="empty.toml")
-    assert dash.messages[-1] == ("error", "rotor file 'empty.toml' is empty") and dash.uploaded is None
+    assert dash.messages[-1] == ("error", "rotor file 'empty.toml' is empty; the rotor stays paper-boundary")
+    assert dash.uploaded is None
 
 
 def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
