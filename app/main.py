@@ -16,17 +16,25 @@ from app.server.pool import get_run_pool
 from app.server.settings import ServerSettings
 from app.tuning.offline_styles import serve_resources_locally
 
-__all__ = ["TITLE", "create_app"]
+__all__ = ["TITLE", "configure_holoviews", "create_app"]
+
+
+def configure_holoviews() -> None:
+    """HoloViews' Bokeh renderer as the page wants it (process-wide settings, applied per page)."""
+    if "bokeh" not in hv.Store.renderers:  # loaded once per process (--setup app/warmup.py), not per page
+        hv.extension("bokeh", logo=False)
+    # 2-D canvas, not WebGL: the plots are small, and without a GPU WebGL is drawn in software
+    hv.renderer("bokeh").webgl = False
+    # no HoloViews theme: rendering the first HoloViews view set it as the document's theme, and the
+    # live plots (plain Bokeh figures) then changed their titles to black 12 pt mid-session
+    hv.renderer("bokeh").theme = None
 
 
 def create_app():
     """Build a fresh page for one session."""
     serve_resources_locally()
     pn.extension(notifications=True, throttled=True)
-    if "bokeh" not in hv.Store.renderers:  # loaded once per process (--setup app/warmup.py), not per page
-        hv.extension("bokeh", logo=False)
-    # 2-D canvas, not WebGL: the plots are small, and without a GPU WebGL is drawn in software
-    hv.renderer("bokeh").webgl = False
+    configure_holoviews()
     settings = ServerSettings.from_env()
     doc = pn.state.curdoc
     served = doc is not None and doc.session_context is not None

@@ -248,6 +248,20 @@ def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
     assert {"amra-run", "amra-stop", "amra-reset", "amra-gj", "amra-gj-slider", "amra-upload"} <= classes
 
 
+def test_opening_a_holoviews_view_leaves_the_pages_look(dash):
+    """Rendering the first HoloViews view (the Modes tab) set HoloViews' theme as the document's, and
+    the live plots' titles turned black 12 pt mid-session."""
+    import holoviews as hv
+    import panel as pn
+    from bokeh.document import Document
+    from app.main import configure_holoviews
+    configure_holoviews()
+    doc = dash.__panel__().server_doc(Document())
+    before = doc.theme._json
+    pn.pane.HoloViews(hv.Curve([1, 2, 3])).get_root(doc)
+    assert doc.theme._json == before == {"attrs": {}}
+
+
 def test_the_figures_every_page_builds_have_one_glyph_per_renderer(dash):
     """The live plots and the map are built for every page: each renderer carries its one glyph
     model, its unselected and muted looks derived in the browser (they use neither selection nor
