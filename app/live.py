@@ -202,8 +202,9 @@ class LivePlots:
             fig.add_glyph(self.markers, VSpan(x="t_s", line_color="#37474f", line_dash="dashed", line_width=1.5))
             fig.add_layout(LabelSet(x="t_s", y=4, y_units="screen", text="text", source=self.markers,
                                     text_font_size="11px", text_color="#37474f", x_offset=3))
-            if len(curves) == 2:
-                fig.add_layout(Legend(items=items, location="top_left"))
+            if len(curves) == 2:  # above the plot, in one row: inside, it hid the first second's twist
+                fig.add_layout(Legend(items=items, location="top_right", orientation="horizontal", padding=2,
+                                      margin=0, label_height=14, glyph_height=14, spacing=12), "above")
             fig.toolbar.logo = None
             out.append(fig)
         # the linked plots all report a zoom: listen to one

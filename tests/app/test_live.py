@@ -63,3 +63,13 @@ def test_zooming_shows_the_range_at_full_resolution_and_reset_returns():
     live.reset()
     assert live.shown(1)["t_s"].max() == pytest.approx(40.0 + 23 * 0.0025)
     assert len(live.shown(1)["t_s"]) <= MAX_POINTS
+
+
+def test_the_blades_legend_sits_above_the_plot_not_on_the_data():
+    """Inside the plot (top left) it hid the first second of the tip twist: the kick's response."""
+    from bokeh.models import Legend
+    figs = LivePlots().figures()
+    twist = next(f for f in figs if "twist" in f.title.text.lower())
+    legends = [m for m in twist.above if isinstance(m, Legend)]
+    assert len(legends) == 1 and [i.label["value"] for i in legends[0].items] == ["blade 0", "blade 1"]
+    assert not any(isinstance(m, Legend) for f in figs for m in f.center)
