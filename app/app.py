@@ -373,7 +373,7 @@ class Dashboard(pn.viewable.Viewer):
             button(c.param.run, button_type="primary", css_classes=["amra-present-run"], width=110, height=44,
                    description=None),
             button(c.param.stop, button_type="warning", width=110, height=44, description=None),
-            checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, **big),
+            checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, on_dark=True, **big),
             self.status.badge, margin=0)
 
     def main(self) -> pn.Column:

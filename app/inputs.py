@@ -38,11 +38,28 @@ def check_message(p: param.Parameter, label: str, raw) -> str:
     return ""
 
 
-def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widgets.FloatInput, **kw) -> pn.Column:
+#: the message line under an input in the sidebar (light background)
+MSG_STYLES = {"color": "#b71c1c", "font-size": "90%"}
+#: the message on a dark header (presentation mode): a light pill laid over what is below the input
+#: (absolute: the header keeps its height), large enough for a projector
+DARK_MSG_STYLES = {"position": "absolute", "top": "100%", "left": "0", "z-index": "1100", "width": "max-content",
+                   "max-width": "none", "color": "#b71c1c", "background": "#ffebee", "font-size": "16px",
+                   "font-weight": "600", "padding": "3px 10px", "border-radius": "12px",
+                   "box-shadow": "0 1px 4px rgba(0, 0, 0, 0.5)"}
+#: a dark header's light text colour reached the input's spinner arrows (the theme's body colour): white
+#: on white; the arrows take the header's dark colour
+DARK_SPINNER_CSS = ".bk-spin-btn {--bs-body-color: #263238; --color: #263238}"
+
+
+def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widgets.FloatInput, on_dark: bool = False,
+                  **kw) -> pn.Column:
     """An input for number parameter ``name`` of ``controls``, and its message line (class
-    ``amra-msg``, made at the first bad value: one model less per input at page build)."""
+    ``amra-msg``, made at the first bad value: one model less per input at page build). ``on_dark``:
+    the input sits on a dark header (presentation mode), its message a light pill over the page."""
     p = controls.param[name]
     label = p.label or name
+    if on_dark:
+        kw["stylesheets"] = [*kw.get("stylesheets", []), DARK_SPINNER_CSS]
     widget = widget_cls(value=getattr(controls, name), label=label, description=tooltip(p), **kw)
     box = pn.Column(widget, sizing_mode=kw.get("sizing_mode", "stretch_width"), margin=0)
 
@@ -54,8 +71,8 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
             except Exception as exc:  # noqa: BLE001 - what param refuses is said, not swallowed
                 bad = f"{label}: {exc}"
         if len(box) == 1 and bad:
-            box.append(pn.pane.HTML("", css_classes=["amra-msg"], sizing_mode="stretch_width",
-                                    styles={"color": "#b71c1c", "font-size": "90%"}, margin=(0, 10, 4, 10)))
+            box.append(pn.pane.HTML("", css_classes=["amra-msg"], sizing_mode=None if on_dark else "stretch_width",
+                                    styles=DARK_MSG_STYLES if on_dark else MSG_STYLES, margin=(0, 10, 4, 10)))
         if len(box) > 1:
             box[1].param.update(object=html.escape(bad), visible=bool(bad))
 
@@ -65,6 +82,17 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
     return box
 
 
+#: the GJ slider's readout of its log10 value: 3 significant digits written out ("1500", "612", "30",
+#: "12.3"); toPrecision alone wrote 1500 as "1.50e+3". :func:`gj_readout` is the same rule in Python.
+GJ_READOUT_JS = "return String(Number((10 ** tick).toPrecision(3)))"
+
+
+def gj_readout(log10_gj: float) -> str:
+    """What the slider shows for ``log10_gj`` (:data:`GJ_READOUT_JS`): GJ [N m²/rad] to 3
+    significant digits, no exponent and no trailing zeros."""
+    return repr(float(f"{10 ** log10_gj:.3g}")).removesuffix(".0")
+
+
 def gj_slider(controls: param.Parameterized) -> pn.widgets.FloatSlider:
     """GJ on a log10 scale, labelled in N m²/rad, a second view of ``controls.gj_nm2``. No echo: a
     handle moved from the server changes ``value`` only, and only a release in the browser changes
@@ -72,7 +100,7 @@ def gj_slider(controls: param.Parameterized) -> pn.widgets.FloatSlider:
     lo, hi = (math.log10(b) for b in GJ_BOUNDS)
     s = pn.widgets.FloatSlider(name="GJ (log scale) [N m²/rad]", start=lo, end=hi, step=0.005,
                                value=math.log10(controls.gj_nm2), sizing_mode="stretch_width",
-                               format=CustomJSTickFormatter(code="return (10 ** tick).toPrecision(3)"),
+                               format=CustomJSTickFormatter(code=GJ_READOUT_JS),
                                css_classes=["amra-gj-slider"])
 
     def released(event):

@@ -62,19 +62,22 @@ class LadderView(pn.viewable.Viewer):
             layers.append(hv.Curve(data, DIMS["t_s"], dim, label=fid).opts(
                 color=COLOURS[fid], line_width=2, line_dash="dashed" if fid == "previous run" else "solid",
                 framewise=True))  # each new set of runs sets the axes (framewise is an element option)
-        return hv.Overlay(layers).opts(title=title, responsive=True, height=260, show_grid=True,
-                                       legend_position="top_left", framewise=True)
+        # at 1280x720 a plot is ~287 px wide: a short title (the row's heading says what is compared)
+        # and the legend under the axes, one entry a line, clear of the curves
+        return hv.Overlay(layers).opts(title=title, responsive=True, height=340, show_grid=True,
+                                       legend_position="bottom", legend_cols=1, framewise=True,
+                                       legend_opts={"margin": 0, "padding": 4, "spacing": 0})
 
     def __panel__(self):
-        def plots(pipe, labels, what):
+        def plots(pipe, labels):
             return pn.Row(*[pn.pane.HoloViews(hv.DynamicMap(
-                lambda data, p=p: self._plot(data, p[0], p[1], f"{p[2]}{what}", labels), streams=[pipe]),
+                lambda data, p=p: self._plot(data, p[0], p[1], p[2], labels), streams=[pipe]),
                 sizing_mode="stretch_width", linked_axes=False) for p in PLOTS])  # each row its own runs
         return pn.Column(
             pn.pane.Markdown("### Previous run vs last run (overlaid when a run finishes)"),
-            plots(self.compare_pipe, COMPARED, ": previous vs last"),
+            plots(self.compare_pipe, COMPARED),
             pn.pane.Markdown("### Fidelity ladder: the same case at the three fidelities"),
-            self.info, self.table, plots(self.pipe, FIDELITIES, " by fidelity"), sizing_mode="stretch_width")
+            self.info, self.table, plots(self.pipe, FIDELITIES), sizing_mode="stretch_width")
 
 
 def _num(x, unit: str = "") -> str:

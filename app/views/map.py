@@ -42,7 +42,15 @@ def cell_columns(cells) -> dict:
     return {"cg_pct": np.array([100.0 * c.cg for c in cells], dtype=float),
             "gj_nm2": np.array([c.gj_nm2 for c in cells], dtype=float), "class": classes,
             "verdict": [str(c.verdict) for c in cells], "growth_rate_per_s": np.array(growth, dtype=float),
+            "growth_text": [growth_text(g) for g in growth],
             "colour": [CLASS_COLOURS.get(k, CLASS_COLOURS["failed"]) for k in classes]}
+
+
+def growth_text(growth_per_s) -> str:
+    """A cell's growth rate for the hover, "—" where it has none (a windmill-brake or failed cell):
+    Bokeh's number format wrote NaN as "NaN"."""
+    ok = growth_per_s is not None and math.isfinite(growth_per_s)
+    return f"{growth_per_s:.3f} 1/s" if ok else "—"
 
 
 def nearest_cell(cells, cg_pct: float, gj: float):
@@ -252,7 +260,7 @@ class MapView(pn.viewable.Viewer):
             class_items.append(LegendItem(label=cls, renderers=[r]))
         fig.add_tools(HoverTool(renderers=cells, tooltips=[
             ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
-            ("verdict", "@verdict"), ("growth rate", "@growth_rate_per_s{0.000} 1/s")]))
+            ("verdict", "@verdict"), ("growth rate", "@growth_text")]))
         band = {"left": "left", "right": "right", "bottom": "bottom", "top": "top"}
         strong = fig.add_glyph(self.band_sources["strong"], Quad(**band, fill_color="#c62828", fill_alpha=0.35,
                                                                  line_color="#c62828"))

@@ -1,0 +1,151 @@
+"""Four defects a tester met at 1280x720: the map's hover wrote "growth rate: NaN 1/s" for a cell
+without one; the GJ slider read "1.50e+3" for 1500; the fidelity ladder's titles were clipped and
+its legends lay on the curves; an out-of-range GJ in presentation mode said so in 9 px dark red on
+the dark header, which grew taller (and the input's spinner arrows were white on white)."""
+from __future__ import annotations
+
+import json
+import math
+import re
+import shutil
+import subprocess
+from types import SimpleNamespace
+
+import holoviews as hv
+import numpy as np
+import panel as pn
+import pytest
+from bokeh.document import Document
+from bokeh.models import HoverTool, Legend, Plot
+
+from amra_core.simulation import COL
+from amra_core.stability import CellResult
+from app.controls import Controls
+from app.inputs import GJ_READOUT_JS, checked_input, gj_readout, gj_slider
+from app.session import Session
+from app.views.ladder import LadderView
+from app.views.map import MapView, cell_columns
+
+HEADER_BACKGROUND = "#263238"  #: app/app.py's header_background
+
+# -- 1. the map's hover
+
+
+def _cell(cg, gj, verdict, growth_per_s):
+    return CellResult(cg=cg, gj_nm2=gj, verdict=verdict, stable=verdict == "stable",
+                      boundary_kind="" if verdict == "stable" else verdict, growth_rate_per_s=growth_per_s,
+                      frequency_hz=None, omega_trim_rad_s=None)
+
+
+def test_the_map_hover_writes_a_dash_for_a_cell_without_a_growth_rate():
+    session = SimpleNamespace(doc=None, throttle=lambda fn, period_s: SimpleNamespace(kick=lambda: None))
+    view = MapView(session, registry=None, who=0, on_pick=lambda cell: None)
+    fig = view.figure()
+    view.cells_source.stream(cell_columns([_cell(0.2, 41.0, "windmill-brake", None),
+                                           _cell(0.4, 1500.0, "stable", -0.1234)]))
+    (hover,) = [h for h in fig.select({"type": HoverTool}) if "growth rate" in dict(h.tooltips)]
+    field = re.fullmatch(r"@\{?(\w+)\}?", dict(hover.tooltips)["growth rate"])  # a text column, as it is
+    assert field is not None, hover.tooltips
+    assert list(view.cells_source.data[field[1]]) == ["—", "-0.123 1/s"]
+
+
+# -- 2. the GJ slider's readout
+
+
+@pytest.mark.parametrize("gj_nm2, shown", [(10.0, "10"), (12.34, "12.3"), (30.0, "30"), (612.3, "612"),
+                                           (1500.0, "1500"), (6100.0, "6100"), (10000.0, "10000")])
+def test_the_gj_readout_is_written_out_to_3_significant_digits(gj_nm2, shown):
+    assert gj_readout(math.log10(gj_nm2)) == shown
+
+
+@pytest.mark.skipif(shutil.which("node") is None, reason="no node to run the formatter's JavaScript")
+def test_the_gj_sliders_javascript_follows_the_python_rule():
+    """The slider's own formatter code, run by node over the whole range, writes what gj_readout does
+    (the browser test runs it in the page)."""
+    code = gj_slider(Controls()).format.code
+    assert code == GJ_READOUT_JS
+    ticks = [float(t) for t in np.linspace(1.0, 4.0, 601)]  # log10 GJ [N m²/rad], the slider's range
+    js = f"const f = (tick) => {{ {code} }};\nconsole.log(JSON.stringify({json.dumps(ticks)}.map(f)));"
+    out = subprocess.run(["node", "-e", js], capture_output=True, text=True, timeout=60, check=True).stdout
+    assert json.loads(out) == [gj_readout(t) for t in ticks]
+
+
+# -- 3. the fidelity ladder
+
+#: at 1280x720 each ladder plot is 287 px wide: its title has ~237 px (frame to canvas edge), about 26
+#: characters of Bokeh's bold title ("Rotor speed: previous vs l" was cut there)
+TITLE_MAX_CHARS = 22
+
+
+def test_the_ladders_titles_fit_and_its_legends_lie_outside_the_data():
+    hv.extension("bokeh")
+    view = LadderView(Session())
+    t = np.linspace(0.0, 3.0, 50)
+    view.show({"runs": {fid: {"t": t, "omega": 30 + 0 * t, "teeter_deg": 0 * t, "twist_deg": 9 + 0 * t}
+                        for fid in ("rigid", "fem-torsion", "fem-coupled")}, "verdicts": []})
+    rows = np.zeros((50, len(COL)))
+    rows[:, COL["t_s"]] = t
+    view.compare(rows, rows)
+    root = pn.panel(view).get_root(Document())
+    plots = [p for p in root.select({"type": Plot}) if p.title is not None and p.title.text]
+    assert len(plots) == 6, [p.title.text for p in plots]
+    for p in plots:
+        assert len(p.title.text) <= TITLE_MAX_CHARS, p.title.text
+        assert not [r for r in p.center if isinstance(r, Legend)], p.title.text  # not on the curves
+        outside = [r for side in (p.below, p.right, p.left, p.above) for r in side if isinstance(r, Legend)]
+        assert len(outside) == 1 and len(outside[0].items) in (2, 3), p.title.text
+
+
+# -- 4. an input's message on the dark header
+
+
+def _luminance(hex_colour: str) -> float:
+    def lin(c):
+        return c / 12.92 if c <= 0.03928 else ((c + 0.055) / 1.055) ** 2.4
+    r, g, b = (int(hex_colour.lstrip("#")[i:i + 2], 16) / 255 for i in (0, 2, 4))
+    return 0.2126 * lin(r) + 0.7152 * lin(g) + 0.0722 * lin(b)
+
+
+def contrast(fg: str, bg: str) -> float:
+    """WCAG contrast ratio of two colours ``#rrggbb``."""
+    hi, lo = sorted((_luminance(fg), _luminance(bg)), reverse=True)
+    return (hi + 0.05) / (lo + 0.05)
+
+
+def _bad_value_message(box):
+    box.objects[0].value = 5.0
+    widget, message = box.objects
+    assert message.visible and "GJ [N m²/rad] = 5 is out of range: allowed 10 to 10000" in message.object
+    return widget, message
+
+
+def test_a_message_on_the_dark_header_is_legible_and_keeps_the_header_height():
+    box = checked_input(Controls(), "gj_nm2", css_classes=["amra-present-gj"], width=170, on_dark=True,
+                        styles={"font-size": "20px"}, stylesheets=[":host input {font-size: 20px; height: 40px}"])
+    widget, message = _bad_value_message(box)
+    st = message.styles
+    background = st.get("background", st.get("background-color", HEADER_BACKGROUND))
+    assert contrast(st["color"], background) >= 4.5, st  # WCAG AA (#b71c1c on #263238: 1.9)
+    assert float(st["font-size"].removesuffix("px")) >= 14, st  # was 90 % of 10 px
+    assert st["position"] == "absolute", st  # over the page below: the header keeps its height
+    # the spinner arrows take a dark colour (the header's white had reached them), the caller's
+    # stylesheet stays
+    assert ":host input {font-size: 20px; height: 40px}" in widget.stylesheets
+    assert any("spin-btn" in s and "#263238" in s for s in widget.stylesheets if isinstance(s, str))
+
+
+def test_a_message_in_the_sidebar_stays_a_line_under_the_input():
+    widget, message = _bad_value_message(checked_input(Controls(), "gj_nm2"))
+    assert message.styles == {"color": "#b71c1c", "font-size": "90%"} and message.sizing_mode == "stretch_width"
+    assert not any("spin-btn" in s for s in widget.stylesheets if isinstance(s, str))
+
+
+def test_the_presentation_headers_gj_input_is_the_dark_variant(dash):
+    """Needs app/app.py's _live_bar to pass ``on_dark=True`` to checked_input."""
+    hv.extension("bokeh")
+    bar = dash._live_bar()
+    (box,) = [o for o in bar.objects if isinstance(o, pn.Column)
+              and "amra-present-gj" in (o.objects[0].css_classes or [])]
+    _, message = _bad_value_message(box)
+    assert message.styles["position"] == "absolute" and contrast(message.styles["color"],
+                                                                 message.styles["background"]) >= 4.5
