@@ -63,7 +63,12 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
     widget = widget_cls(value=getattr(controls, name), label=label, description=tooltip(p), **kw)
     box = pn.Column(widget, sizing_mode=kw.get("sizing_mode", "stretch_width"), margin=0)
 
+    reverting = []  # the box is being set back to the kept value: its message stays
+
     def typed(event):
+        if reverting and event.new == reverting[-1]:
+            reverting.clear()
+            return
         bad = "" if event.new == getattr(controls, name) else check_message(p, label, event.new)
         if not bad:
             try:  # (a value the control already has: set from elsewhere, or typed again)
@@ -75,6 +80,10 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
                                     styles=DARK_MSG_STYLES if on_dark else MSG_STYLES, margin=(0, 10, 4, 10)))
         if len(box) > 1:
             box[1].param.update(object=html.escape(bad), visible=bool(bad))
+        if event.new is None:  # emptied (or not numeric): the box shows the value kept, not "NaN"
+            reverting[:] = [getattr(controls, name)]
+            pn.state.execute(lambda: setattr(widget, "value", reverting[-1]) if reverting else None,
+                             schedule=True)  # after this change has reached the widget
 
     widget.param.watch(typed, "value")
     # a preset, a link or the slider moved the value: the input shows it, and its message goes

@@ -33,6 +33,18 @@ def test_a_bad_value_is_named_and_the_control_keeps_its_value(name, bad, fragmen
     assert getattr(c, name) == good and not message.visible
 
 
+def test_an_emptied_input_shows_the_kept_value_and_says_why():
+    """Cleared (the browser then sends no value), the box showed "NaN" beside its message."""
+    c = Controls()
+    box = checked_input(c, "gj_nm2")
+    box.objects[0].value = None
+    widget, message = box.objects
+    assert widget.value == c.gj_nm2 == 1500.0  # the kept value, not NaN
+    assert message.visible and "not a number (empty or not numeric)" in message.object
+    widget.value = 700.0
+    assert c.gj_nm2 == 700.0 and not message.visible
+
+
 def test_a_value_set_elsewhere_shows_in_the_input_without_a_message():
     c = Controls()
     box = checked_input(c, "gj_nm2")
