@@ -85,3 +85,19 @@ def test_an_out_of_range_gj_on_the_presentation_header_is_legible(watched_page, 
     arrow = page.evaluate(JS_STYLE, ["bk-spin-btn-up", "::before"])
     assert arrow is not None and _contrast(_rgb(arrow["arrow"]), (255, 255, 255)) >= 3, arrow  # not white on white
     assert tab.bounding_box()["y"] == pytest.approx(tab_top_px, abs=1)  # and stay there
+
+
+def test_an_emptied_gj_input_shows_the_kept_value_not_nan(watched_page, dashboard_url):
+    """Cleared and entered, the box read "NaN" beside its message."""
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?preset=nominal")
+    exact = page.locator(".amra-gj input").first
+    exact.fill("")
+    exact.press("Enter")
+    expect(page.get_by_text("not a number (empty or not numeric)").first).to_be_visible(timeout=30_000)
+    expect(exact).to_have_value("1500", timeout=30_000)
+    exact.fill("700")
+    exact.press("Enter")
+    expect(page.get_by_text("not a number (empty or not numeric)")).to_have_count(0, timeout=30_000)
+    expect(exact).to_have_value("700")
+    assert page.amra_errors == []
