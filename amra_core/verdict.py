@@ -65,7 +65,9 @@ STABLE_MIN_FIT_S = math.log(1.1) / GROWTH_THRESHOLD_PER_S
 SUSTAINED_SLOPE_PER_S = -0.25 * GROWTH_THRESHOLD_PER_S
 SUSTAINED_FRACTION = 0.1
 DECAYED_FROM_START = "the rotor speed decayed from the start"  #: said of an untrimmed run's collapse
-OUTCOMES = ("decays", "bounded-oscillation", "rotor-speed-collapse", "runaway", "undetermined")
+#: ``neutral``: a stable verdict whose envelope neither decays nor grows measurably (fit in
+#: 0 .. GROWTH_THRESHOLD_PER_S): it read "decays" with a growth of +0.0013 1/s
+OUTCOMES = ("decays", "neutral", "bounded-oscillation", "rotor-speed-collapse", "runaway", "undetermined")
 
 
 @dataclass
@@ -511,6 +513,11 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
                        + f", but a stable verdict needs at least {STABLE_MIN_FIT_S:.2g} s and {STABLE_MIN_CYCLES} cycles "
                        f"of the dominant motion in the fitted last two thirds: run about "
                        f"{1.5 * STABLE_MIN_FIT_S:.0f} s or longer")
+    if growth > 0.0:  # below the threshold: not a decay (a map may call so slow a mode unstable)
+        return Verdict("stable", growth, freq, None, amp_end,
+                       f"no measurable growth: the envelope's fit {growth:+.4f} 1/s is below the "
+                       f"{GROWTH_THRESHOLD_PER_S:g} 1/s a run resolves (a map's eigen-analysis may call a mode "
+                       f"this slow unstable)", "neutral")
     return Verdict("stable", growth, freq, None, amp_end, "the perturbation decays", "decays")
 
 

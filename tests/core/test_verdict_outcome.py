@@ -39,6 +39,14 @@ def test_decaying_run_is_stable_and_decays():
     assert v.rotor_speed.startswith("rotor speed kept") and "40.0 rad/s" in v.rotor_speed
 
 
+def test_a_growth_below_the_threshold_is_neutral_not_a_decay():
+    """A map's flutter cell (fem-torsion CG 26 %, GJ 186) ran "stable, the perturbation decays" with a
+    growth rate of +0.0013 1/s."""
+    v = run_judge(history(lambda t: 0.01 * np.exp(-3.0 * t) + 1e-5 * np.exp(0.005 * t)))  # kick gone, a slow rest
+    assert v.verdict == "stable" and v.outcome == "neutral" and 0.0 < v.growth_rate_per_s < 0.02, v
+    assert v.explanation.startswith("no measurable growth") and "decays" not in v.explanation
+
+
 def test_saturating_oscillation_is_a_bounded_flutter_with_its_amplitudes():
     """Grows at +2 1/s from 1e-4 rad, levels off at 0.005 rad (below the 0.01 rad kick scale):
     the old fit over the last two thirds saw a flat envelope and said "stable"."""
