@@ -94,15 +94,29 @@ def locus_result(rotor, flight, settings, cg: float) -> dict:
         modes = tuple(m for m in (p.modes or ()) if m.label != "aero lag") if trimmed else ()
         re = p.max_real_part_per_s if trimmed and math.isfinite(p.max_real_part_per_s) else None
         pts.append(LocusPoint(float(p.gj_nm2), trimmed, modes, re, bool(p.stable)))
-    trimmed = [p for p in pts if p.trimmed]
+    return {"points": pts, "text": locus_text(pts)}
+
+
+def locus_text(pts: list) -> str:
+    """The locus's summary: where the branch followed down from the stiff end stops (the fold, as
+    the map puts it), trims found again below it, and the unstable ones. It took the lowest trim of
+    all: an isolated set of violently unstable trims at GJ 50-79 read as the fold (fem-coupled, CG
+    40 %), against the map's 700."""
     text = f"Root locus: {len(pts)} GJ values from {LOCUS_GJ_RANGE[1]:g} down to {LOCUS_GJ_RANGE[0]:g} N m²/rad"
-    if len(trimmed) < len(pts):
-        low = min((p.gj_nm2 for p in trimmed), default=math.nan)
-        text += f"; no trim (fold) below about {low:.4g} N m²/rad"
-    unstable = [p.gj_nm2 for p in trimmed if not p.stable]
+    down = sorted(pts, key=lambda p: -p.gj_nm2)
+    top = next((i for i, p in enumerate(down) if not p.trimmed), len(down))  # the branch from the top
+    if top < len(down):
+        fold = down[top - 1].gj_nm2 if top else math.nan
+        text += f"; no trim (fold) below about {fold:.4g} N m²/rad"
+        again = [p for p in down[top:] if p.trimmed]
+        if again:
+            worst = max((p.max_real_part_per_s for p in again if p.max_real_part_per_s is not None), default=None)
+            text += (f"; trims again at GJ {min(p.gj_nm2 for p in again):.4g}-{max(p.gj_nm2 for p in again):.4g} "
+                     f"N m²/rad, cut off from the branch" + (f" (σ up to {worst:+.3g} 1/s)" if worst is not None else ""))
+    unstable = [p.gj_nm2 for p in down[:top] if not p.stable]
     if unstable:
-        text += f"; unstable trims at GJ ≤ {max(unstable):.4g} N m²/rad"
-    return {"points": pts, "text": text}
+        text += f"; unstable trims on the branch at GJ ≤ {max(unstable):.4g} N m²/rad"
+    return text
 
 
 def fan_data(rotor, fidelity: str, n_modes: int = 8) -> dict:

@@ -127,7 +127,9 @@ class ModesView(pn.viewable.Viewer):
         crit = hv.DynamicMap(self._critical, streams=[self.points_pipe, self.current])
         return pn.Column(
             pn.Row(pn.Column(self.info, self.table, sizing_mode="stretch_width"),
-                   pn.pane.HoloViews(crit, sizing_mode="stretch_width"), sizing_mode="stretch_width"),
+                   pn.pane.HoloViews(crit, sizing_mode="stretch_width", linked_axes=False), sizing_mode="stretch_width"),
             pn.Card(self.pick, self.animation, title="Watch a mode", sizing_mode="stretch_width"),
-            self.locus_info, pn.pane.HoloViews(locus, sizing_mode="stretch_width"),
+            # each plot its own σ range: linked by their shared dimension, the least-damped plot spanned
+            # the locus's -50 .. 0 1/s and its zero crossing (data -0.56 .. +0.97) could not be read
+            self.locus_info, pn.pane.HoloViews(locus, sizing_mode="stretch_width", linked_axes=False),
             sizing_mode="stretch_width")

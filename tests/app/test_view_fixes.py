@@ -149,3 +149,28 @@ def test_the_presentation_headers_gj_input_is_the_dark_variant(dash):
     _, message = _bad_value_message(box)
     assert message.styles["position"] == "absolute" and contrast(message.styles["color"],
                                                                  message.styles["background"]) >= 4.5
+
+
+# -- the root locus's summary and axes
+
+
+def test_the_locus_summary_puts_the_fold_where_the_branch_ends_not_at_a_lower_island():
+    """fem-coupled, axial, CG 40 %: "no trim (fold) below about 50 N m²/rad", from an isolated set of
+    violently unstable trims at GJ 50-79, while the branch ends near 700 (as the map says)."""
+    from app.compute import LocusPoint, locus_text
+    pts = [LocusPoint(g, True, (), -0.5, True) for g in (3000.0, 1500.0, 900.0)]
+    pts += [LocusPoint(g, True, (), 0.3, False) for g in (800.0, 706.0)]
+    pts += [LocusPoint(g, False, (), None, False) for g in (680.0, 300.0, 81.0)]
+    pts += [LocusPoint(78.75, True, (), 218.0, False), LocusPoint(50.0, True, (), 248.0, False)]
+    text = locus_text(pts)
+    assert "no trim (fold) below about 706 N m²/rad" in text
+    assert "trims again at GJ 50-78.75 N m²/rad, cut off from the branch (σ up to +248 1/s)" in text
+    assert "unstable trims on the branch at GJ ≤ 800 N m²/rad" in text
+
+
+def test_the_least_damped_plot_keeps_its_own_real_part_range():
+    """Linked by their shared σ dimension, the least-damped plot spanned the root locus's -50..0 1/s."""
+    from app.views.modes import ModesView
+    session = SimpleNamespace(subscribe=lambda *a, **k: None)
+    panes = ModesView(session).__panel__().select(pn.pane.HoloViews)
+    assert len(panes) == 2 and not any(p.linked_axes for p in panes)
