@@ -9,7 +9,7 @@ import panel as pn
 from holoviews.streams import Pipe, Stream
 
 from ..compute import FAN_OMEGA_MAX as OMEGA_MAX
-from ..events import Fan, RunStatus
+from ..events import Fan, Modes, RunStatus
 from . import Dim
 
 OMEGA_DIM = Dim("omega_rad_s", label="Rotor speed Ω", unit="rad/s")
@@ -24,11 +24,13 @@ class FanView(pn.viewable.Viewer):
         self.pipe = Pipe(data={})
         self.omega = Omega()
         session.subscribe(Fan, lambda ev: self.pipe.send(ev.result))
-        session.subscribe(RunStatus, self._move)  # once a second while a run runs
+        session.subscribe(RunStatus, lambda ev: self._move(ev.omega_rad_s))  # once a second while a run runs
+        # before any run, the current case's trim (the marker sat at 0 rad/s until a run)
+        session.subscribe(Modes, lambda ev: self._move(ev.result.get("omega_rad_s")))
 
-    def _move(self, ev: RunStatus) -> None:
-        if ev.omega_rad_s is not None and abs(ev.omega_rad_s - self.omega.omega) > 0.05:
-            self.omega.event(omega=ev.omega_rad_s)  # each move re-renders the plot
+    def _move(self, omega_rad_s) -> None:
+        if omega_rad_s is not None and abs(omega_rad_s - self.omega.omega) > 0.05:
+            self.omega.event(omega=omega_rad_s)  # each move re-renders the plot
 
     def _plot(self, data):
         layers = []

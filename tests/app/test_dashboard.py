@@ -138,6 +138,8 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
     assert len(fan["modes"]) >= 5
     teeter = dict(fan["modes"])["teeter"]  # the rigid tilt of a teetering rotor is exactly 1/rev
     np.testing.assert_allclose(teeter, fan["omega"] / (2 * np.pi), atol=1e-6)
+    # before any run the fan's marker stands at the case's trim (it sat at 0 rad/s until a run)
+    assert dash.last_history is None and dash.fan.omega.omega == pytest.approx(33.89, abs=0.01)
 
 
 def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
