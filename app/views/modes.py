@@ -16,9 +16,11 @@ import pandas as pd
 import panel as pn
 from holoviews.streams import Pipe, Stream
 
+from ..compute import LOCUS_GJ_RANGE
 from ..events import Locus, ModeFrames, Modes
 from . import Dim
 from .rotor import ModeAnimation
+from .status import units_as_shown
 
 MODE_COLUMNS = ["mode", "frequency [Hz]", "damping ratio [-]", "real part [1/s]", "stable"]
 GJ_DIM = Dim("gj_nm2", label="GJ", unit="N m²/rad")
@@ -35,6 +37,14 @@ def modes_frame(modes) -> pd.DataFrame:
     rows = [(m.label, round(m.frequency_hz, 3), round(m.damping_ratio, 4), round(m.real_part_per_s, 4),
              "yes" if m.real_part_per_s < 1e-3 else "NO") for m in modes if m.label != "aero lag"]
     return pd.DataFrame(rows, columns=MODE_COLUMNS)
+
+
+def gj_colours(gj_nm2: np.ndarray) -> list:
+    """Viridis colours of GJ [N m²/rad] on a log scale over the locus's range (purple: soft, yellow: stiff)."""
+    from bokeh.palettes import Viridis256
+    lo, hi = (math.log10(g) for g in LOCUS_GJ_RANGE)
+    x = np.clip((np.log10(np.asarray(gj_nm2, dtype=float)) - lo) / (hi - lo), 0.0, 1.0)
+    return [Viridis256[int(round(v * 255))] for v in x]
 
 
 def locus_frame(points) -> pd.DataFrame:
@@ -73,7 +83,7 @@ class ModesView(pn.viewable.Viewer):
         modes = result.get("modes", [])
         self.frame = modes_frame(modes)
         self.table.object = self.frame
-        self.info.object = result.get("text", "")
+        self.info.object = units_as_shown(result.get("text", ""))
         options = {"(choose a mode)": None}
         for m in modes:
             if m.label != "aero lag":
@@ -100,9 +110,12 @@ class ModesView(pn.viewable.Viewer):
     # -- plots
     def _locus(self, data, gj):
         data = locus_frame(data)
-        pts = hv.Points(data, [RE_DIM, F_DIM], [LOG_GJ_DIM, "label", GJ_DIM]).opts(
-            color="log_gj", cmap="viridis", colorbar=True, size=7, tools=["hover"],
-            clabel="log10 GJ [N m²/rad]")
+        # each point's colour computed here, on one GJ scale for every case (the locus's range): a
+        # colour-mapped column failed in the browser for fem-coupled forward flight ("invalid color
+        # array" on every update, both plots left empty)
+        data = data.assign(colour=gj_colours(data["gj_nm2"].to_numpy()))
+        pts = hv.Points(data, [RE_DIM, F_DIM], [LOG_GJ_DIM, "label", GJ_DIM, "colour"]).opts(
+            color="colour", size=7, tools=["hover"], framewise=True)
         near = data.iloc[0:0]
         if len(data):
             g = data["gj_nm2"].unique()
@@ -110,17 +123,19 @@ class ModesView(pn.viewable.Viewer):
         cur = hv.Points(near, [RE_DIM, F_DIM], ["label"], label="nearest sampled GJ").opts(
             marker="circle", size=13, fill_alpha=0, line_color="red", line_width=2)
         return (pts * cur * hv.VLine(0.0).opts(color="black", line_dash="dashed")).opts(
-            title="Root locus over GJ (current CG)", responsive=True, height=300, show_grid=True,
-            legend_position="top_left")
+            title="Root locus over GJ, current CG (colour: GJ, purple 50 to yellow 3000 N m²/rad)", responsive=True,
+            height=300, show_grid=True, legend_position="top_left", framewise=True)
 
     def _critical(self, data, gj):
         data = critical_frame(data)
-        curve = hv.Curve(data, [GJ_DIM], [RE_DIM], label="largest real part").opts(logx=True)
-        dots = hv.Scatter(data, [GJ_DIM], [RE_DIM]).opts(size=6, logx=True)
+        # framewise: the axes follow each new locus (rendered before the first one arrived, as a slow
+        # fem-coupled forward-flight locus does, the plots kept their empty 0..1 ranges and looked empty)
+        curve = hv.Curve(data, [GJ_DIM], [RE_DIM], label="largest real part").opts(logx=True, framewise=True)
+        dots = hv.Scatter(data, [GJ_DIM], [RE_DIM]).opts(size=6, logx=True, framewise=True)
         return (curve * dots * hv.HLine(0.0).opts(color="black", line_dash="dashed")
                 * hv.VLine(gj).opts(color="red")).opts(
             title="Least-damped mode vs GJ (gaps: no trim)", responsive=True, height=300, show_grid=True,
-            logx=True, legend_position="top_left", xticks=GJ_TICKS)
+            logx=True, legend_position="top_left", xticks=GJ_TICKS, framewise=True)
 
     def __panel__(self):
         locus = hv.DynamicMap(self._locus, streams=[self.points_pipe, self.current])

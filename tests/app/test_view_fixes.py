@@ -174,3 +174,25 @@ def test_the_least_damped_plot_keeps_its_own_real_part_range():
     session = SimpleNamespace(subscribe=lambda *a, **k: None)
     panes = ModesView(session).__panel__().select(pn.pane.HoloViews)
     assert len(panes) == 2 and not any(p.linked_axes for p in panes)
+
+
+def test_the_locus_plots_follow_a_locus_that_arrives_after_they_are_drawn():
+    """fem-coupled forward flight (mu 0.3): the locus arrived after the tab was drawn; the plots kept
+    their empty 0..1 ranges (not framewise) and the colour-mapped points failed in the browser
+    ("invalid color array"): both plots looked empty."""
+    from app.compute import LocusPoint
+    from app.views.modes import ModesView
+    from amra_core.stability import Mode
+    view = ModesView(SimpleNamespace(subscribe=lambda *a, **k: None))
+    locus = hv.DynamicMap(view._locus, streams=[view.points_pipe, view.current])
+    crit = hv.DynamicMap(view._critical, streams=[view.points_pipe, view.current])
+    plots = [hv.renderer("bokeh").get_plot(dm) for dm in (locus, crit)]
+    modes = (Mode("torsion", 24.6, 0.01, -2.0, {}), Mode("lag", 8.6, 0.02, -0.9, {}))
+    view.show_locus([LocusPoint(3000.0, True, modes, -0.9, True), LocusPoint(2176.0, True, modes, 2.4, False),
+                     LocusPoint(2000.0, False, (), None, False)], "")
+    x = plots[0].handles["x_range"]
+    assert x.start <= -2.0 and x.end >= -0.9  # the locus's real parts, not 0..1
+    y = plots[1].handles["y_range"]
+    assert y.start <= -0.9 and y.end >= 2.4
+    pts = plots[0].subplots[list(plots[0].subplots)[0]].handles["source"].data
+    assert all(isinstance(c, str) and c.startswith("#") for c in pts["colour"])  # colours, not a mapped column

@@ -101,3 +101,15 @@ def test_an_emptied_gj_input_shows_the_kept_value_not_nan(watched_page, dashboar
     expect(page.get_by_text("not a number (empty or not numeric)")).to_have_count(0, timeout=30_000)
     expect(exact).to_have_value("700")
     assert page.amra_errors == []
+
+
+def test_the_modes_tab_draws_a_forward_flight_locus_that_comes_late(watched_page, dashboard_url):
+    """fem-coupled at mu 0.3: the tab is drawn before its locus arrives (seconds later); the
+    colour-mapped points then threw "invalid color array" on every update."""
+    page = watched_page
+    open_dashboard(page, dashboard_url + "?mu=0.3&fidelity=fem-coupled")
+    page.locator(".bk-tab", has_text="Modes & root locus").first.click()
+    expect(page.get_by_text("Root locus: ", exact=False).first).to_be_visible(timeout=180_000)
+    expect(page.get_by_text("no trim (fold) below about").first).to_be_visible()
+    page.wait_for_timeout(3000)  # the plots' updates after the locus
+    assert page.amra_errors == [], f"console errors: {page.amra_errors}"
