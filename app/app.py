@@ -295,7 +295,7 @@ class Dashboard(pn.viewable.Viewer):
         return exports.history_csv(self.session.sim, self.last_history, verdict)
 
     def modes_csv(self):
-        return exports.modes_csv(self.modes.frame, self.controls)
+        return exports.modes_csv(self.modes.frame, self.controls, self.modes.about)
 
     def map_csv(self):
         return self.map.csv() if self.map is not None else map_csv([], complete=False)

@@ -76,7 +76,8 @@ def modes_result(rotor, flight, settings) -> dict:
     kind = "eigenvalues (axial flight)" if res.method == "eigenvalues" else "Floquet exponents (forward flight)"
     crit = res.critical
     verdict = "**stable**" if res.stable else f"**unstable**: {crit.label} mode, σ = {crit.real_part_per_s:+.3g} 1/s"
-    return {"modes": res.modes, "omega_rad_s": float(res.trim.omega_rad_s),
+    return {"modes": res.modes, "omega_rad_s": float(res.trim.omega_rad_s), "method": res.method,
+            "stable": bool(res.stable), "descent_rate_m_s": float(res.trim.descent_rate_m_s),
             "text": f"Modes of the trim ({kind}) at Ω = {res.trim.omega_rad_s:.2f} rad/s: {verdict}"}
 
 

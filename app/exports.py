@@ -27,11 +27,13 @@ def history_csv(sim, history: np.ndarray | None = None, verdict: str | None = No
     return io.StringIO(table_csv(HISTORY_COLUMNS, h, meta))
 
 
-def modes_csv(frame: pd.DataFrame, c) -> io.StringIO:
-    """The mode table (columns with units in their names) with the case of the controls ``c`` above."""
+def modes_csv(frame: pd.DataFrame, c, about: dict | None = None) -> io.StringIO:
+    """The mode table (columns with units in their names) with the case of the controls ``c`` above,
+    and ``about`` the table: its trim's rotor speed and descent rate, eigenvalues or Floquet, stable."""
     meta = {"preset": c.preset, "rotor": c.rotor, "gj_nm2": float(c.gj_nm2), "ea_pct_chord": float(c.ea_pct),
             "cg_pct_chord": float(c.cg_pct), "mu": float(c.mu), "airspeed_m_s": float(c.airspeed_m_s),
             "fidelity": c.fidelity, "aero": c.aero, "inflow": c.inflow}
+    meta |= {k: ("" if v is None else v) for k, v in (about or {}).items()}
     return io.StringIO(table_csv(list(frame.columns), frame.itertuples(index=False), meta))
 
 

@@ -62,6 +62,7 @@ class ModesView(pn.viewable.Viewer):
     def __init__(self, session, **params):
         super().__init__(**params)
         self.frame = modes_frame([])
+        self.about: dict = {}  #: the trim and method of the table (set with it)
         self.table = pn.pane.DataFrame(self.frame, index=False, sizing_mode="stretch_width", max_height=320,
                                        name="mode-table")
         self.info = pn.pane.Markdown("Modes of the trim: computing ...", name="modes-info")
@@ -81,6 +82,10 @@ class ModesView(pn.viewable.Viewer):
     # -- updates (event loop)
     def show_modes(self, result: dict) -> None:
         modes = result.get("modes", [])
+        #: what the table is of, for its export (the page says it above the table)
+        self.about = {"trim_omega_rad_s": result.get("omega_rad_s"), "trim_descent_rate_m_s": result.get("descent_rate_m_s"),
+                      "method": result.get("method", "none (no trim)"),
+                      "stable": None if "stable" in result and result["stable"] is None else result.get("stable")}
         self.frame = modes_frame(modes)
         self.table.object = self.frame
         self.info.object = units_as_shown(result.get("text", ""))

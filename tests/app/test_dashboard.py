@@ -133,6 +133,8 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
     assert list(dash.modes.frame.columns)[:2] == ["mode", "frequency [Hz]"]  # the table's header, as exported
     text = dash.modes_csv().getvalue()
     assert text.startswith("# AMRA ") and "# gj_nm2: 1500" in text and "\nmode,frequency [Hz]" in text
+    # what the table is of: its trim and method (the page says them above the table; the file did not)
+    assert "# trim_omega_rad_s: 33.89" in text and "# method: eigenvalues" in text and "# stable: True" in text
     assert dash.exports.buttons["modes"].filename == "amra-paper-boundary-rigid-gj1500-cg40-modes.csv"
     fan = dash.fan.pipe.data
     assert len(fan["modes"]) >= 5
@@ -173,6 +175,8 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     lines = dash.map.csv().getvalue().splitlines()
     meta = [ln for ln in lines if ln.startswith("# ")]
     assert "# complete: yes" in meta and "# ea_pct_chord: 32" in meta
+    # the whole map's case: which rotor and GJ grid (the file named neither)
+    assert "# rotor: paper-boundary" in meta and "# gj_range_nm2: 30 to 3000" in meta and "# method: eigen" in meta
     assert lines[len(meta)].startswith("cg_pct_chord,gj_nm2,verdict")  # CG in % as on the page
     assert len(lines) == len(meta) + len(dash.map.cells) + 1
     assert lines[-1].split(",")[0] == f"{100 * max(c.cg for c in dash.map.cells):.8g}"
