@@ -7,6 +7,7 @@ the 17-digit round-off noise of a float's full repr). Read back with ``numpy.loa
 """
 from __future__ import annotations
 
+import csv
 import io
 import math
 import re
@@ -59,10 +60,13 @@ def table_csv(columns: Iterable[str], rows, meta: Mapping[str, object] | None = 
     out = io.StringIO()
     for line in header_lines(meta or {}):
         out.write(line + "\n")
-    out.write(",".join(columns) + "\n")
+    # quoted where needed: a map cell's reason has commas ("... descent rate 23.1 m/s (4.12 v_h), not
+    # autorotation"), which split its row into more fields than the header had
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(list(columns))
     for row in (rows.tolist() if isinstance(rows, np.ndarray) else rows):
-        out.write(",".join(_fmt(float(v) if isinstance(v, (int, float, np.floating)) and not isinstance(v, bool)
-                                else v) for v in row) + "\n")
+        w.writerow([_fmt(float(v) if isinstance(v, (int, float, np.floating)) and not isinstance(v, bool) else v)
+                    for v in row])
     return out.getvalue()
 
 

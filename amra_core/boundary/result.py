@@ -1,7 +1,6 @@
 """A finished (or partial) boundary map: cells, per-column summaries, transitions, JSON and CSV."""
 from __future__ import annotations
 
-import csv
 import math
 from dataclasses import dataclass, field
 
@@ -90,14 +89,21 @@ class BoundaryMap:
         }
 
     def to_csv(self, path) -> None:
-        """One row per cell: cg, gj_nm2, verdict, stable, boundary_kind, growth_rate_per_s [1/s],
-        frequency_hz [Hz], omega_trim_rad_s [rad/s], reason."""
+        """One row per cell: cg [chord fraction], gj_nm2, verdict, stable, boundary_kind,
+        growth_rate_per_s [1/s], frequency_hz [Hz], omega_trim_rad_s [rad/s], reason; above them
+        ``#`` lines with the map's case (rotor, fidelity, mu, EA, GJ grid) and whether it is complete,
+        as the dashboard's map export has (:func:`amra_core.export.table_csv`)."""
+        from ..export import table_csv
+        sp = self.spec
+        meta = {"complete": "yes" if self.complete else "NO: cancelled or unfinished", "rotor": sp.rotor_name(),
+                "fidelity": sp.fidelity, "aero": sp.aero, "mu": sp.mu, "ea_chord_fraction": sp.ea,
+                "cg_columns_chord_fraction": " ".join(f"{c:g}" for c in sp.cg_values),
+                "gj_range_nm2": f"{sp.gj_min:g} to {sp.gj_max:g}", "gj_tolerance": sp.gj_rel_tol,
+                "coarse_gj_values": sp.n_coarse, "method": sp.method, "fem_elements": sp.n_elements}
         cols = list(CellResult.__dataclass_fields__)
+        rows = [["" if getattr(c, k) is None else getattr(c, k) for k in cols] for c in self.cells]
         with open(path, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(cols)
-            for c in self.cells:
-                w.writerow(["" if getattr(c, k) is None else getattr(c, k) for k in cols])
+            f.write(table_csv(cols, rows, meta))
 
 
 def _summarise(spec: MapSpec, by_col: dict, info: dict) -> tuple[list, list]:

@@ -409,3 +409,17 @@ def test_a_status_line_update_sends_only_its_text(dash):
         dash.status.card.value = "<div class='amra-verdict' data-verdict='stable'>stable</div>"
         dash.map.status.value = "<b>Map</b>: computing"
     assert len(changed) >= 3 and set(changed) == {"text"}, changed  # (a widget shown twice sends twice)
+
+
+def test_an_exported_map_reads_back_as_a_table_whatever_its_reasons_say():
+    """A cell's reason has commas ("... (4.12 v_h), not autorotation"): unquoted, it split its row."""
+    import io
+    import pandas as pd
+    from amra_core.stability import CellResult
+    from app.views.map import map_csv
+    cells = [CellResult(0.2, 41.0, "no-autorotation", False, "windmill-brake", None, None, 30.0,
+                        "no normal autorotation; descent rate 23.1 m/s (4.12 v_h), not autorotation", "windmill-brake"),
+             CellResult(0.4, 1500.0, "stable", True, "", -0.5, 12.0, 33.9, 'least damped: "torsion"', "normal")]
+    df = pd.read_csv(io.StringIO(map_csv(cells).getvalue()), comment="#")
+    assert len(df) == 2 and list(df["reason"]) == [cells[0].reason, cells[1].reason]
+    assert list(df["cg_pct_chord"]) == [20.0, 40.0]

@@ -276,8 +276,11 @@ def test_csv_and_json(tmp_path, full_map):
     p = tmp_path / "map.csv"
     bmap.to_csv(p)
     lines = p.read_text().splitlines()
-    assert lines[0].startswith("cg,gj_nm2,verdict,stable,boundary_kind")
-    assert len(lines) == bmap.cases + 1
+    meta = [ln for ln in lines if ln.startswith("# ")]  # the map's case above the table (it had none)
+    assert meta[0].startswith("# AMRA ") and "# complete: yes" in meta and f"# fidelity: {bmap.spec.fidelity}" in meta
+    assert f"# rotor: {bmap.spec.rotor_name()}" in meta and any(m.startswith("# gj_range_nm2: ") for m in meta)
+    assert lines[len(meta)].startswith("cg,gj_nm2,verdict,stable,boundary_kind")
+    assert len(lines) == len(meta) + bmap.cases + 1
 
 
 def test_png_is_written(tmp_path, full_map):
