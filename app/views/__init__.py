@@ -10,3 +10,9 @@ class Dim(hv.Dimension):
     live plots, the map and the controls do (HoloViews' own default is "Frequency (Hz)")."""
 
     unit_format = " [{unit}]"
+
+
+def signed(x: float, digits: int) -> str:
+    """``x`` with its sign to ``digits`` decimals; what rounds to zero is +0 ("teeter -0.00°" and a
+    "-0" change read as values)."""
+    return f"{round(x, digits) + 0.0:+.{digits}f}"

@@ -14,8 +14,10 @@ import math
 
 import numpy as np
 import panel as pn
-from bokeh.models import ColumnDataSource, Range1d
+from bokeh.models import ColumnDataSource, Legend, Range1d
 from bokeh.plotting import figure
+
+from . import signed
 
 FLAP_SCALE = 3.0  #: flap displacement drawn this many times larger than it is [-] (coning ~0.3 m at the tip)
 TWIST_SCALE = 10.0  #: elastic twist drawn this many times larger than it is [-]
@@ -49,6 +51,20 @@ def tip_section(twist_rad: float, chord_m: float, x_ea: float, twist_scale: floa
     a = twist_rad * twist_scale  # nose up = leading edge (x < 0) up
     c, s = math.cos(a), math.sin(a)
     return x * c + y * s, -x * s + y * c
+
+
+def pose_line(t_s: float, p) -> str:
+    """The live rotor's line of numbers for pose ``p`` at ``t_s`` [s]."""
+    deg = math.degrees
+    return (f"t = {t_s:.2f} s · teeter {signed(deg(p.teeter_rad), 2)}° · tip twist {signed(deg(p.twist_rad[0][-1]), 2)}° / "
+            f"{signed(deg(p.twist_rad[1][-1]), 2)}° (blade 0 / 1) · tip flap {signed(100 * p.flap_m[0][-1], 1)} / "
+            f"{signed(100 * p.flap_m[1][-1], 1)} cm")
+
+
+def _legend_row(items: list) -> Legend:
+    """A legend in one row above a plot, clear of what it draws."""
+    return Legend(items=items, location="top_right", orientation="horizontal", padding=2, margin=0,
+                  label_height=14, glyph_height=14, spacing=12)
 
 
 class RotorDrawing:
@@ -85,18 +101,18 @@ class RotorDrawing:
                       y_range=Range1d(-0.25 * reach, 0.55 * reach), tools="save", toolbar_location="right",
                       x_axis_label="Span position, blade 0 to the right [m]",
                       y_axis_label=f"Flap displacement {flap_note} [m]")
-        side.line("x", "y", source=self.hub, line_width=6, color="#455a64", legend_label="hub bar")
+        items = [("hub bar", [side.line("x", "y", source=self.hub, line_width=6, color="#455a64")])]
         for b, (src, colour) in enumerate(zip(self.blades, BLADE_COLOURS)):
-            side.line("x", "y", source=src, line_width=4, color=colour, legend_label=f"blade {b}")
-        side.legend.location = "top_left"
+            items.append((f"blade {b}", [side.line("x", "y", source=src, line_width=4, color=colour)]))
+        side.add_layout(_legend_row(items), "above")  # inside (top left) it covered blade 1's outer span
         side.toolbar.logo = None
         c = 0.8 * chord_m
         tips = figure(title=f"Tip sections: twist {twist_note}", height=260, width=360,
                       x_range=Range1d(-c, c), y_range=Range1d(-c, c), match_aspect=True, tools="save",
                       x_axis_label="Chordwise, leading edge left [m]", y_axis_label="Up [m]")
-        for b, (src, colour) in enumerate(zip(self.sections, BLADE_COLOURS)):
-            tips.patch("x", "y", source=src, fill_alpha=0.25, color=colour, line_width=2, legend_label=f"blade {b}")
-        tips.legend.location = "top_left"
+        items = [(f"blade {b}", [tips.patch("x", "y", source=src, fill_alpha=0.25, color=colour, line_width=2)])
+                 for b, (src, colour) in enumerate(zip(self.sections, BLADE_COLOURS))]
+        tips.add_layout(_legend_row(items), "above")
         tips.toolbar.logo = None
         return side, tips
 
@@ -155,9 +171,7 @@ class LiveRotor(pn.viewable.Viewer):
         p = ev.pose
         self.poses += 1
         self.drawing.draw(p.r_m, p.flap_m, p.twist_rad, p.teeter_rad, p.chord_m, p.x_ea, p.radius_m)
-        self.info.object = (f"t = {ev.t_s:.2f} s · teeter {math.degrees(p.teeter_rad):+.2f}° · tip twist "
-                            f"{math.degrees(p.twist_rad[0][-1]):+.2f}° / {math.degrees(p.twist_rad[1][-1]):+.2f}° "
-                            f"(blade 0 / 1) · tip flap {100 * p.flap_m[0][-1]:+.1f} / {100 * p.flap_m[1][-1]:+.1f} cm")
+        self.info.object = pose_line(ev.t_s, p)
 
     def __panel__(self):
         return pn.Column(self.info, self.drawing.panel(), sizing_mode="stretch_width", name="live-rotor")

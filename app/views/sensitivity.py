@@ -20,6 +20,7 @@ from amra_core.export import table_csv
 from .. import compute
 from ..events import Sensitivity
 from .status import text
+from . import signed
 
 TABLE_COLUMNS = ("estimate", "change_pct", "value", "unit", "fold_gj_nm2", "d_fold_gj_nm2", "flutter_gj_nm2",
                  "d_flutter_gj_nm2", "note")
@@ -41,7 +42,7 @@ def display_frame(result: dict) -> pd.DataFrame:
     """The table as the page shows it: numbers to 4 significant digits, a missing boundary said in
     words, a missing change as a dash."""
     def delta(d):
-        return "–" if d is None else f"{d:+.0f}"
+        return "–" if d is None else signed(d, 0)
     rows = [(r["label"], f"{100.0 * r['change']:+.0f}", f"{r['value']:.4g}", r["unit"], _gj(r["fold_gj_nm2"]),
              delta(r["d_fold_gj_nm2"]), _gj(r["flutter_gj_nm2"]), delta(r["d_flutter_gj_nm2"]), r["note"] or "")
             for r in result["rows"]]

@@ -110,3 +110,24 @@ def test_the_live_rotor_follows_the_run_and_a_picked_mode_plays(dash, wait):
     anim.player.value = compute.MODE_FRAMES // 4  # a quarter cycle on, the blade has moved
     assert not np.allclose(np.array(anim.drawing.blades[0].data["y"]), first)
     assert anim.player.visible and "flap" in anim.info.object
+
+
+def test_the_rotor_drawings_legends_sit_above_them():
+    """Inside the side view (top left) the legend covered blade 1's outer span."""
+    from bokeh.models import Legend
+    from app.views.rotor import RotorDrawing
+    figs = RotorDrawing().figures
+    for fig in figs:
+        assert [type(m) for m in fig.above].count(Legend) == 1
+        assert not any(isinstance(m, Legend) for m in fig.center)
+    assert [i.label["value"] for i in next(m for m in figs[0].above if isinstance(m, Legend)).items] == \
+        ["hub bar", "blade 0", "blade 1"]
+
+
+def test_a_pose_that_rounds_to_zero_reads_plus_zero():
+    """The live rotor read "teeter -0.00°" for a teeter of -2e-6 deg."""
+    from types import SimpleNamespace
+    from app.views.rotor import pose_line
+    p = SimpleNamespace(teeter_rad=-3e-8, twist_rad=[[0.049], [-1e-9]], flap_m=[[0.295], [-0.0001]])
+    line = pose_line(3.0, p)
+    assert "teeter +0.00°" in line and "/ +0.00° (blade 0 / 1)" in line and "/ +0.0 cm" in line and "-0." not in line

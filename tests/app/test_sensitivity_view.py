@@ -51,3 +51,12 @@ def test_an_invalid_case_is_named_not_studied(dash):
     dash.sensitivity.start()
     assert dash.messages and "cannot study the sensitivity of this case" in dash.messages[-1][1]
     assert dash.sensitivity.result is None and not dash.sensitivity.busy.visible
+
+
+def test_a_change_that_rounds_to_zero_reads_plus_zero():
+    """A boundary that moved by -0.3 N m²/rad read "-0" in the table."""
+    from app.views.sensitivity import display_frame
+    row = {"label": "hub polar inertia", "change": -0.1, "value": 1.0, "unit": "kg m²", "fold_gj_nm2": 414.0,
+           "d_fold_gj_nm2": -0.3, "flutter_gj_nm2": None, "d_flutter_gj_nm2": None, "note": ""}
+    table = display_frame({"rows": [row]})
+    assert "-0" not in table.to_string().replace("-10", "") and "+0" in table.to_string()
