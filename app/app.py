@@ -21,7 +21,7 @@ from amra_core.verdict import teeter_amplitude_rad
 
 from . import compute, exports
 from .controls import LIVE_PARAMETERS, LIVE_VALUE_OF, PRESETS, UPLOADED, Controls, UploadError, parse_rotor_upload
-from .events import Applied, Fan, Finished, Ladder, Locus, ModeFrames, Modes, Notice, Rows
+from .events import Applied, Fan, Finished, Ladder, Locus, ModeFrames, Modes, Notice, Rows, live_values_text
 from .inputs import checked_input, gj_slider, tooltip
 from .live import LivePlots, columns_from_rows
 from .server.pool import LatestTasks, get_analysis_pool
@@ -242,7 +242,7 @@ class Dashboard(pn.viewable.Viewer):
             values = {k: v for k, v in self.controls.live_values().items() if k in moved}
             if values:
                 self.session.set_live(**values)
-                self.status.note.value = f"applied live at the next chunk: {Applied(0, values, 0.0).text(', ', True)}"
+                self.status.note.value = f"applied live at the next chunk: {live_values_text(values, ', ', True)}"
 
     def _on_case(self, *events) -> None:
         if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):

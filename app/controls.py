@@ -348,9 +348,11 @@ def sync_url(controls: Controls, location=None) -> None:
     # bad value, so none are repeated here)
     loc.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"}, on_error=lambda bad: None)
 
-    def write_preset(*_):  # the preset one way only: a copied link reopens as the preset it shows
-        loc.update_query(preset=controls.preset)  # (it kept the opening link's preset=fig10 after
-    controls.param.watch(write_preset, list(URL_KEYS))  # Fig. 12 was chosen, and opened as custom)
+    # the preset one way only, so a copied link reopens as the preset it shows (the URL kept the
+    # opening link's preset=fig10 after Fig. 12 was chosen, and the link opened as a custom case)
+    def write_preset(*_):
+        loc.update_query(preset=controls.preset)
+    controls.param.watch(write_preset, list(URL_KEYS))
     write_preset()
 
 

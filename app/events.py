@@ -51,10 +51,16 @@ class Applied:
 
     def text(self, sep: str = " ", unit: bool = False) -> str:
         """The new values, e.g. ``GJ 700 EA 30%`` (``unit``: with GJ's unit)."""
-        v = self.values
-        parts = [f"GJ {v['gj_nm2']:.4g}" + (" N m²/rad" if unit else "")] if v.get("gj_nm2") is not None else []
-        parts += [f"{n} {100 * v[k]:.3g} %" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if v.get(k) is not None]
-        return sep.join(parts)
+        return live_values_text(self.values, sep, unit)
+
+
+def live_values_text(values: dict, sep: str = " ", unit: bool = False) -> str:
+    """GJ [N m²/rad], EA and CG [chord fractions] of a live change as text, e.g. ``GJ 700 EA 30 %``
+    (``unit``: with GJ's unit); the values absent are left out."""
+    v = values
+    parts = [f"GJ {v['gj_nm2']:.4g}" + (" N m²/rad" if unit else "")] if v.get("gj_nm2") is not None else []
+    parts += [f"{n} {100 * v[k]:.3g} %" for n, k in (("EA", "x_ea"), ("CG", "x_cg")) if v.get(k) is not None]
+    return sep.join(parts)
 
 
 @dataclass(frozen=True)

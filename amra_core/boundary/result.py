@@ -95,11 +95,8 @@ class BoundaryMap:
         as the dashboard's map export has (:func:`amra_core.export.table_csv`)."""
         from ..export import table_csv
         sp = self.spec
-        meta = {"complete": "yes" if self.complete else "NO: cancelled or unfinished", "rotor": sp.rotor_name(),
-                "fidelity": sp.fidelity, "aero": sp.aero, "mu": sp.mu, "ea_chord_fraction": sp.ea,
-                "cg_columns_chord_fraction": " ".join(f"{c:g}" for c in sp.cg_values),
-                "gj_range_nm2": f"{sp.gj_min:g} to {sp.gj_max:g}", "gj_tolerance": sp.gj_rel_tol,
-                "coarse_gj_values": sp.n_coarse, "method": sp.method, "fem_elements": sp.n_elements}
+        meta = {"complete": "yes" if self.complete else "NO: cancelled or unfinished", **sp.grid_meta(),
+                "ea_chord_fraction": sp.ea, "cg_columns_chord_fraction": " ".join(f"{c:g}" for c in sp.cg_values)}
         cols = list(CellResult.__dataclass_fields__)
         rows = [["" if getattr(c, k) is None else getattr(c, k) for k in cols] for c in self.cells]
         with open(path, "w", newline="") as f:

@@ -163,6 +163,13 @@ class MapSpec:
     def rotor_name(self) -> str:
         return self.rotor if isinstance(self.rotor, str) else self.rotor.name
 
+    def grid_meta(self) -> dict:
+        """The map's case for a file header, apart from EA and the CG columns (whose unit each export
+        chooses): rotor, fidelity, aerodynamics, mu, the GJ grid [N m^2/rad], method, elements."""
+        return {"rotor": self.rotor_name(), "fidelity": self.fidelity, "aero": self.aero, "mu": self.mu,
+                "gj_range_nm2": f"{self.gj_min:g} to {self.gj_max:g}", "gj_tolerance": self.gj_rel_tol,
+                "coarse_gj_values": self.n_coarse, "method": self.method, "fem_elements": self.n_elements}
+
     def to_dict(self) -> dict:
         d = {k: getattr(self, k) for k in self.__dataclass_fields__ if k != "rotor"}
         d["rotor"] = self.rotor_name()

@@ -117,10 +117,8 @@ def map_csv(cells, spec=None, complete: bool = True) -> io.StringIO:
     fields = [k for k in CellResult.__dataclass_fields__ if k != "cg"]
     meta = {"complete": "yes" if complete else f"NO: {len(cells)} cells so far, the map was still filling"}
     if spec is not None:
-        meta |= {"rotor": spec.rotor_name(), "fidelity": spec.fidelity, "aero": spec.aero, "ea_pct_chord": 100 * spec.ea,
-                 "mu": spec.mu, "cg_columns_pct_chord": " ".join(f"{100 * c:g}" for c in spec.cg_values),
-                 "gj_range_nm2": f"{spec.gj_min:g} to {spec.gj_max:g}", "gj_tolerance": spec.gj_rel_tol,
-                 "coarse_gj_values": spec.n_coarse, "method": spec.method, "fem_elements": spec.n_elements}
+        meta |= {**spec.grid_meta(), "ea_pct_chord": 100 * spec.ea,
+                 "cg_columns_pct_chord": " ".join(f"{100 * c:g}" for c in spec.cg_values)}
     rows = [[100.0 * c.cg] + ["" if getattr(c, k) is None else getattr(c, k) for k in fields]
             for c in sorted(cells, key=lambda c: (c.cg, c.gj_nm2))]
     return io.StringIO(table_csv(["cg_pct_chord", *fields], rows, meta))

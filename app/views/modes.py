@@ -84,8 +84,7 @@ class ModesView(pn.viewable.Viewer):
         modes = result.get("modes", [])
         #: what the table is of, for its export (the page says it above the table)
         self.about = {"trim_omega_rad_s": result.get("omega_rad_s"), "trim_descent_rate_m_s": result.get("descent_rate_m_s"),
-                      "method": result.get("method", "none (no trim)"),
-                      "stable": None if "stable" in result and result["stable"] is None else result.get("stable")}
+                      "method": result.get("method", "none (no trim)"), "stable": result.get("stable")}
         self.frame = modes_frame(modes)
         self.table.object = self.frame
         self.info.object = units_as_shown(result.get("text", ""))
