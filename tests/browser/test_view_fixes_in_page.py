@@ -109,7 +109,7 @@ def test_the_modes_tab_draws_a_forward_flight_locus_that_comes_late(watched_page
     page = watched_page
     open_dashboard(page, dashboard_url + "?mu=0.3&fidelity=fem-coupled")
     page.locator(".bk-tab", has_text="Modes & root locus").first.click()
-    expect(page.get_by_text("Root locus: ", exact=False).first).to_be_visible(timeout=180_000)
-    expect(page.get_by_text("no trim (fold) below about").first).to_be_visible()
+    # the locus's own summary (not the "computing ..." line before it): it takes seconds, more on a busy machine
+    expect(page.get_by_text("no trim (fold) below about").first).to_be_visible(timeout=300_000)
     page.wait_for_timeout(3000)  # the plots' updates after the locus
     assert page.amra_errors == [], f"console errors: {page.amra_errors}"
