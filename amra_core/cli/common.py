@@ -31,14 +31,29 @@ def number(name, lo, hi, integer=False):
     return parse
 
 
+def chord_fraction(name):
+    """A chordwise position [chord fraction, 0 to 1]; a value typed in % chord (as the dashboard
+    shows it) is refused with the fraction it meant."""
+    def parse(text):
+        try:
+            v = float(text)
+        except ValueError:
+            v = math.nan
+        if 1.0 < v <= 100.0:
+            raise argparse.ArgumentTypeError(f"{name} = {text} is out of range: allowed [0.0, 1.0], a chord fraction "
+                                             f"({v:g} % chord is {name} {v / 100:g})")
+        return number(name, 0.0, 1.0)(text)
+    return parse
+
+
 def rotor_args(p, overrides=True):
     g = p.add_mutually_exclusive_group()
     g.add_argument("--preset", help="shipped rotor preset (mccutcheon, paper-boundary)")
     g.add_argument("--rotor", metavar="FILE", help="a rotor TOML file of your own")
     if overrides:
         p.add_argument("--gj", type=number("--gj", 1.0, 1e6), help="uniform GJ [N m^2/rad]")
-        p.add_argument("--ea", type=number("--ea", 0.0, 1.0), help="uniform elastic axis [chord fraction]")
-        p.add_argument("--cg", type=number("--cg", 0.0, 1.0), help="uniform centre of gravity [chord fraction]")
+        p.add_argument("--ea", type=chord_fraction("--ea"), help="uniform elastic axis [chord fraction]")
+        p.add_argument("--cg", type=chord_fraction("--cg"), help="uniform centre of gravity [chord fraction]")
 
 
 def flight_args(p):
@@ -67,7 +82,7 @@ def column_case_args(p):
     rigid_spring_arg(p)
     p.add_argument("--aero", choices=AERO_MODELS, default="theodorsen")
     p.add_argument("--mu", type=number("--mu", 0.0, 0.5), default=0.0, help="advance ratio [-] (0 = axial)")
-    p.add_argument("--ea", type=number("--ea", 0.0, 1.0), default=0.32, help="elastic axis [chord fraction]")
+    p.add_argument("--ea", type=chord_fraction("--ea"), default=0.32, help="elastic axis [chord fraction]")
 
 
 def load_rotor(args):

@@ -9,7 +9,7 @@ import math
 import sys
 
 from ..flight import SolverSettings
-from .common import column_case_args, dumps_strict, number, value_range
+from .common import chord_fraction, column_case_args, dumps_strict, number, value_range
 
 
 def _fmt(v):
@@ -79,7 +79,7 @@ def register(sub) -> None:
                                    "column is walked again (the map's column walk) with the value changed by "
                                    "-STEP and +STEP; prints the fold GJ and flutter GJ and their changes.")
     column_case_args(p)
-    p.add_argument("--cg", type=number("--cg", 0.0, 1.0), default=0.40, help="CG column [chord fraction]")
+    p.add_argument("--cg", type=chord_fraction("--cg"), default=0.40, help="CG column [chord fraction]")
     p.add_argument("--step", type=number("--step", 0.001, 0.49), default=0.10,
                    help="relative change of each estimate (default 0.10: +-10 %%)")
     p.add_argument("--params", metavar="A,B,...", help="only these estimates (default: all)")

@@ -162,6 +162,10 @@ BAD_ARGS = [
     (["trim", "--airspeed", "100"], ["--airspeed", "100", "[0.0, 80.0]"]),
     (["trim", "--omega-hold", "-3"], ["--omega-hold", "-3", "[1.0, 200.0]"]),
     (["trim", "--ea", "x"], ["--ea", "x", "[0.0, 1.0]"]),
+    # a position typed in % chord, as the dashboard shows it: the message gives the fraction meant
+    (["simulate", "--cg", "40"], ["--cg", "40", "[0.0, 1.0]", "40 % chord is --cg 0.4"]),
+    (["trim", "--ea", "32.5"], ["--ea", "32.5", "[0.0, 1.0]", "32.5 % chord is --ea 0.325"]),
+    (["sensitivity", "--preset", "paper-boundary", "--cg", "35"], ["--cg", "35", "35 % chord is --cg 0.35"]),
     (["modes", "--omega", "1e9"], ["--omega", "1e9", "[0.0, 200.0]"]),
     (["stability", "--mu", "0.9"], ["--mu", "0.9", "[0.0, 0.5]"]),
     (["stability", "--preset", "nosuch"], ["preset", "nosuch", "mccutcheon"]),
