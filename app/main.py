@@ -19,6 +19,10 @@ from app.tuning.offline_styles import serve_resources_locally
 __all__ = ["TITLE", "configure_holoviews", "create_app"]
 
 
+#: the HoloViews elements the views draw (each gets the page's default options)
+HOLOVIEWS_ELEMENTS = ("Curve", "Points", "Scatter", "QuadMesh", "VLine", "HLine", "Overlay")
+
+
 def configure_holoviews() -> None:
     """HoloViews' Bokeh renderer as the page wants it (process-wide settings, applied per page)."""
     if "bokeh" not in hv.Store.renderers:  # loaded once per process (--setup app/warmup.py), not per page
@@ -28,6 +32,9 @@ def configure_holoviews() -> None:
     # no HoloViews theme: rendering the first HoloViews view set it as the document's theme, and the
     # live plots (plain Bokeh figures) then changed their titles to black 12 pt mid-session
     hv.renderer("bokeh").theme = None
+    # no plot takes the mouse wheel until its wheel-zoom tool is chosen: HoloViews activates it by
+    # default, and scrolling the page down through the tabs zoomed the fan plot under the pointer
+    hv.opts.defaults(*(getattr(hv.opts, element)(active_tools=["pan"]) for element in HOLOVIEWS_ELEMENTS))
 
 
 def create_app():

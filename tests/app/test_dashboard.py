@@ -268,6 +268,26 @@ def test_opening_a_holoviews_view_leaves_the_pages_look(dash):
     assert doc.theme._json == before == {"attrs": {}}
 
 
+def test_no_view_takes_the_mouse_wheel_until_its_zoom_is_chosen(dash):
+    """HoloViews activates wheel zoom by default: scrolling the page down over the fan plot zoomed
+    it instead. Every view's plot leaves the wheel to the page (wheel zoom stays in the toolbar)."""
+    import panel as pn
+    from bokeh.document import Document
+    from bokeh.models import Toolbar, WheelZoomTool
+    from app.main import configure_holoviews
+    configure_holoviews()
+    views = [dash.fan, dash.modes, dash.disc, dash.ladder, dash.rotor_view]
+    toolbars = []
+    for view in views:
+        root = pn.panel(view).get_root(Document())
+        toolbars += [m for m in root.references() if isinstance(m, Toolbar)]
+    toolbars += [f.toolbar for f in [*dash.live.figures(), dash.map.figure()]]
+    assert len(toolbars) >= 8
+    assert any(isinstance(t, WheelZoomTool) for tb in toolbars for t in tb.tools)
+    assert all(not isinstance(tb.active_scroll, WheelZoomTool) for tb in toolbars), \
+        [type(tb.active_scroll).__name__ for tb in toolbars]
+
+
 def test_the_figures_every_page_builds_have_one_glyph_per_renderer(dash):
     """The live plots and the map are built for every page: each renderer carries its one glyph
     model, its unselected and muted looks derived in the browser (they use neither selection nor
