@@ -45,6 +45,10 @@ class LiveChange:
         return f"at t = {self.t_s:g} s: {', '.join(parts)}"
 
 
+#: two times [s] closer than this are one instant (times summed over chunks differ in the last bits)
+TIME_TOLERANCE_S = 1e-9
+
+
 @dataclass(frozen=True)
 class Scenario:
     """A :class:`~amra_core.simulation.Case` (the starting blade, flight and run length
@@ -67,12 +71,16 @@ class Scenario:
                                 f"({self.case.t_end_s:g} s)")
 
     def due(self, t_from_s: float, t_to_s: float) -> tuple:
-        """The changes with ``t_from_s < t_s <= t_to_s``: those a chunk ending at ``t_to_s`` crossed."""
-        return tuple(c for c in self.changes if t_from_s < c.t_s <= t_to_s + 1e-9)
+        """The changes with ``t_from_s < t_s <= t_to_s``: those a chunk ending at ``t_to_s`` crossed.
+        Both ends are read within :data:`TIME_TOLERANCE_S`, so the chunk that ends on a change (at
+        1.9999999999999998 s for 2 s, times summed over chunks) applies it and the next chunk, which
+        starts there, does not apply it again (Fig. 12 at playback 10x was softened at 2.0 and again
+        at 2.6 s, and its verdict was judged from 2.6 s)."""
+        return tuple(c for c in self.changes if t_from_s + TIME_TOLERANCE_S < c.t_s <= t_to_s + TIME_TOLERANCE_S)
 
     def next_change_s(self, t_s: float) -> Optional[float]:
         """Time [s] of the first change after ``t_s``, or None."""
-        return next((c.t_s for c in self.changes if c.t_s > t_s + 1e-9), None)
+        return next((c.t_s for c in self.changes if c.t_s > t_s + TIME_TOLERANCE_S), None)
 
 
 def apply_change(sim: Simulation, change: LiveChange) -> None:

@@ -230,3 +230,19 @@ def test_an_empty_batch_of_rows_never_reaches_the_views():
     s.post(Rows(s.run_id, np.ones((2, len(COL))), 900.0, 0.1))
     s.deliver()
     assert [len(e.rows) for e in rec.of(Rows)] == [2]
+
+
+def test_fig12_at_playback_10_is_softened_once(wait):
+    """Fig. 12 (rigid, mu 0.1, softened to GJ 300 at 2 s) at playback 10x: the chunk that ended on the
+    change stopped at 1.9999999999999998 s, so the next chunk applied it again at 2.6 s. The verdict
+    then judged from 2.6 s and called the collapsing rotor stable ("rotor speed kept: 14.2 rad/s")."""
+    c = Controls(preset="fig12")
+    c.run_s = 3.0
+    scenario = c.scenario()
+    s = Session()
+    rec = Recorder(s)
+    s.start(scenario.case, 10.0, scenario.changes)
+    run_until(s, lambda: rec.of(Finished), wait, what="the run to finish")
+    scripted = [e for e in rec.of(Applied) if e.values.get("scripted")]
+    assert len(scripted) == 1 and scripted[0].t_s == pytest.approx(2.0, abs=1e-9), [(e.t_s, e.values) for e in scripted]
+    assert len(s.sim.changes) == 1

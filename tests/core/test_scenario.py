@@ -74,7 +74,7 @@ def forward_case(paper):
                 SolverSettings(fidelity="rigid"), t_end_s=2.1)
 
 
-@pytest.mark.parametrize("chunk_s", [0.06, 0.07, 0.24, 1.2])
+@pytest.mark.parametrize("chunk_s", [0.06, 0.07, 0.24, 0.4, 0.6, 1.2])
 def test_a_change_lands_at_its_time_whatever_the_chunks(forward_case, chunk_s):
     """The dashboard marches in chunks of playback speed x 60 ms and ends a chunk at each scripted
     change. A span that is a whole number of steps up to the rounding of the summed times took one
