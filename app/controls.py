@@ -170,10 +170,12 @@ class Controls(param.Parameterized):
     @param.depends("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
                    "aero", "inflow", "soften_at_s", watch=True)
     def _left_preset(self):
+        """An edit away from a preset's values makes the case custom, with the selector and its card
+        told (set without events, the selector kept showing "Fig. 10" and its text, and choosing
+        Fig. 10 again changed nothing)."""
         if not self._applying_preset and self.preset != "custom":
             if any(getattr(self, k) != v for k, v in PRESETS[self.preset].as_dict().items()):
-                with param.parameterized.discard_events(self):
-                    self.preset = "custom"
+                self.preset = "custom"  # the custom preset sets no values
 
     # -- mapping to the solver
     def rotor_obj(self, uploaded: Rotor | None = None) -> Rotor:

@@ -443,3 +443,20 @@ def test_an_exported_map_reads_back_as_a_table_whatever_its_reasons_say():
     df = pd.read_csv(io.StringIO(map_csv(cells).getvalue()), comment="#")
     assert len(df) == 2 and list(df["reason"]) == [cells[0].reason, cells[1].reason]
     assert list(df["cg_pct_chord"]) == [20.0, 40.0]
+
+
+def test_an_edit_away_from_a_preset_shows_custom_in_the_selector_and_its_card(dash):
+    """After GJ was typed over Fig. 10's, the selector still showed "Fig. 10" and its card its text
+    (the URL said custom), and choosing Fig. 10 again did not bring its GJ back."""
+    import panel as pn
+    from app.controls import PRESETS
+    sidebar = dash.sidebar()
+    select = next(w for w in sidebar.select(pn.widgets.Select) if w.name == "Preset")
+    card = sidebar.select(lambda o: getattr(o, "name", "") == "preset-explanation")[0]
+    dash.controls.preset = "fig10"
+    assert select.value == "fig10" and dash.controls.gj_nm2 == 100.0
+    dash.controls.gj_nm2 = 300.0
+    assert dash.controls.preset == "custom" and select.value == "custom"
+    assert card.object == PRESETS["custom"].explanation
+    select.value = "fig10"  # chosen again in the page
+    assert dash.controls.gj_nm2 == 100.0 and card.object == PRESETS["fig10"].explanation
