@@ -71,6 +71,13 @@ def case_label(c: Controls, scenario) -> str:
     return " · ".join([name] + [f.replace(" ", "\u00a0") for f in fields])
 
 
+def ladder_case_text(c: Controls) -> str:
+    """What the ladder runs, in words: the case, and its softening when there is one."""
+    if c.soften_at_s:
+        return f"{c.run_s:g} s, GJ {NOMINAL_GJ_NM2:g} → {c.gj_nm2:.4g} N m²/rad at {c.soften_at_s:g} s as in the run"
+    return f"{c.run_s:g} s, GJ {c.gj_nm2:.4g} N m²/rad"
+
+
 class Dashboard(pn.viewable.Viewer):
     def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, run_pool=None,
                  doc=None, **params):
@@ -173,13 +180,15 @@ class Dashboard(pn.viewable.Viewer):
         self._clear_messages()
 
     def run_ladder(self, *_) -> None:
+        """The run's case at the three fidelities, softened as the run is (it ran the softened GJ from
+        the start: Fig. 10's ladder showed no collapse time)."""
         try:
-            cases = {fid: self.controls.case(self.uploaded, fidelity=fid) for fid in FIDELITIES}
+            scenarios = {fid: self.controls.scenario(self.uploaded, fidelity=fid) for fid in FIDELITIES}
         except Exception as exc:  # noqa: BLE001
             self.notify(f"cannot run the ladder: {exc}")
             return
-        self.ladder.info.object = "Running the case at rigid, fem-torsion and fem-coupled ..."
-        self.tasks.submit("ladder", Ladder, compute.run_ladder, cases)
+        self.ladder.running(ladder_case_text(self.controls))
+        self.tasks.submit("ladder", Ladder, compute.run_ladder, scenarios)
 
     def animate_mode(self, real_part_per_s: float, frequency_hz: float, label: str) -> None:
         """Compute the frames of a mode of the current case's trim (analysis pool)."""

@@ -16,6 +16,7 @@ from typing import Optional
 import numpy as np
 
 from amra_core.model import compile_model
+from amra_core.scenario import run_scenario
 from amra_core.shapes import FIDELITIES
 from amra_core.simulation import COL, Simulation
 from amra_core.stability import analyse
@@ -135,17 +136,17 @@ def ladder_curves(history: np.ndarray) -> dict:
             "twist_deg": np.degrees(h[:, COL["tip_twist_0_rad"]])}
 
 
-def run_ladder(cases: dict) -> dict:
-    """``{fidelity: Case}`` -> ``{"runs": {fidelity: ladder_curves}, "verdicts": rows}``: each case run
-    unpaced to its end, with its verdict."""
+def run_ladder(scenarios: dict) -> dict:
+    """``{fidelity: Scenario}`` -> ``{"runs": {fidelity: ladder_curves}, "verdicts": rows}``: each run
+    unpaced to its end, its scripted changes (a softening) included, with its verdict."""
     runs, rows = {}, []
     for fid in FIDELITIES:
-        case = cases.get(fid)
-        if case is None:
+        scenario = scenarios.get(fid)
+        if scenario is None:
             continue
         try:
             with np.errstate(all="ignore"):
-                sim = Simulation(case).run(chunk_s=0.5)
+                sim = run_scenario(scenario, chunk_s=0.5)
                 v = sim.verdict()
         except Exception as exc:  # noqa: BLE001 - one failed rung does not stop the ladder
             rows.append((fid, "failed", None, None, None, str(exc)))

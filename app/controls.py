@@ -199,9 +199,9 @@ class Controls(param.Parameterized):
         """The solver case for the current values (raises ValueError naming a bad value)."""
         return Case(self.rotor_obj(uploaded), self.flight(), self.settings(fidelity), t_end_s=float(self.run_s))
 
-    def scenario(self, uploaded: Rotor | None = None) -> Scenario:
+    def scenario(self, uploaded: Rotor | None = None, fidelity: str | None = None) -> Scenario:
         """The run to start: the case, and with ``soften_at_s`` the nominal blade softened to GJ then."""
-        case = self.case(uploaded)
+        case = self.case(uploaded, fidelity)
         if not self.soften_at_s:
             return Scenario(case)
         if not self.soften_at_s < self.run_s:

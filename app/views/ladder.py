@@ -34,6 +34,7 @@ class LadderView(pn.viewable.Viewer):
                                      "fidelities.", name="ladder-info")
         self.compare_pipe = Pipe(data={})
         self.previous = None  #: the last finished run's history
+        self.case_text = ""  #: what the ladder runs, in words (:func:`app.app.ladder_case_text`)
         session.subscribe(Ladder, lambda ev: self.show(ev.result))
         session.subscribe(Finished, self._finished)
 
@@ -47,8 +48,12 @@ class LadderView(pn.viewable.Viewer):
         self.compare_pipe.send({label: ladder_curves(h) for label, h in zip(COMPARED, (previous, current))
                                 if h is not None and len(h)})
 
+    def running(self, case_text: str) -> None:
+        self.case_text = case_text
+        self.info.object = f"Running the case ({case_text}) at rigid, fem-torsion and fem-coupled ..."
+
     def show(self, result: dict) -> None:
-        self.info.object = "Fidelity ladder: the current case at the three fidelities."
+        self.info.object = f"Fidelity ladder: the current case ({self.case_text}) at the three fidelities."
         self.pipe.send(result["runs"])
         self.table.object = verdict_table(result["verdicts"])
 

@@ -64,3 +64,21 @@ def test_the_two_rows_keep_their_own_axes():
     plots = [p for p in root.select({"type": Plot}) if p.title is not None and p.title.text.startswith("Rotor speed")]
     assert len(plots) == 2
     assert plots[0].y_range is not plots[1].y_range and plots[0].x_range is not plots[1].x_range
+
+
+def test_the_ladder_runs_the_softening_the_run_has():
+    """Fig. 10's ladder ran GJ 100 from the start (rigid: "no-autorotation", no collapse time, the
+    rotor speed from 24.7 rad/s), while its run is softened from GJ 1500 at 2 s and collapses at
+    3.3 s. The ladder runs the run's scenario, and says so."""
+    from app.app import ladder_case_text
+    from app.compute import run_ladder
+    from app.controls import Controls
+    from amra_core.scenario import run_scenario
+    c = Controls(preset="fig10")
+    c.run_s = 6.0
+    assert "1500 → 100 N m²/rad at 2 s as in the run" in ladder_case_text(c)
+    scenario = c.scenario(fidelity="rigid")
+    (fid, verdict, growth, freq, collapse_s, _), = run_ladder({"rigid": scenario})["verdicts"]
+    run = run_scenario(scenario).verdict()
+    assert (fid, verdict, collapse_s) == ("rigid", run.verdict, run.collapse_time_s)
+    assert 2.0 < collapse_s < 6.0
