@@ -157,6 +157,7 @@ class Dashboard(pn.viewable.Viewer):
         self.status.reset()
         self._clear_messages()  # each run starts with a clean message area
         self.status.case = case_label(self.controls, scenario)
+        self.status.gj_nm2 = float(np.mean(scenario.case.rotor.stations.gj_nm2))  # the softening moves it
         self.status.run.value = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
         self._run_preset = self.controls.preset

@@ -4,6 +4,7 @@ changes. They change only in the session's deliveries (event loop, document lock
 from __future__ import annotations
 
 import html
+from typing import Optional
 
 import panel as pn
 
@@ -72,15 +73,20 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
             f"<div>{html.escape(units_as_shown(verdict.explanation))}</div><table>{table}</table>{note}</div>")
 
 
-def badge_html(verdict, final: bool) -> str:
-    """The verdict for the header in presentation mode (on its dark background): the verdict word, and
-    the rotor-speed collapse on a second line (one line overflowed a 1280 px projector's header)."""
+def badge_html(verdict, final: bool, gj_nm2: Optional[float] = None) -> str:
+    """The verdict for the header in presentation mode (on its dark background): the verdict word, the
+    GJ it was found at (beside the header's GJ input, a class read "stable" as the verdict of a GJ
+    typed after the run) and the rotor-speed collapse on a second line (one line overflowed a
+    1280 px projector's header)."""
     if verdict is None:
         return "<span style='color:#eceff1;font-size:20px'>no run yet</span>"
     colour = {"stable": "#a5d6a7"}.get(verdict.verdict, "#ffab91")
-    collapse = f"<br>Ω collapsed at {verdict.collapse_time_s:.1f} s" if verdict.collapse_time_s is not None else ""
+    second = [f"at GJ {gj_nm2:.4g} N m²/rad"] if gj_nm2 is not None else []
+    if verdict.collapse_time_s is not None:
+        second.append(f"Ω collapsed at {verdict.collapse_time_s:.1f} s")
+    second_line = "<br>" + " · ".join(second) if second else ""
     return (f"<span style='color:{colour};font-size:22px;font-weight:bold'>{html.escape(verdict.verdict)}</span>"
-            f"<span style='color:#eceff1;font-size:16px'> ({'final' if final else 'so far'}){collapse}</span>")
+            f"<span style='color:#eceff1;font-size:16px'> ({'final' if final else 'so far'}){second_line}</span>")
 
 
 def run_html(text: str) -> str:
@@ -104,13 +110,14 @@ class StatusView(pn.viewable.Viewer):
     def __init__(self, session, notify, **params):
         super().__init__(**params)
         self.card = text(verdict_html(None, False))
-        self.badge = text(badge_html(None, False), "amra-badge", width=300, sizing_mode=None)
+        self.badge = text(badge_html(None, False), "amra-badge", width=360, sizing_mode=None)
         self.run = text(run_html("idle"), "amra-run-status")
         self.note = text("", "amra-live-note")
         self.verdict = None
         self.notify = notify
         self.case = ""  #: the case of the run the card speaks of (set when a run starts)
         self.case_at_start = ""  #: ... as it started (before any live change)
+        self.gj_nm2: Optional[float] = None  #: the run's GJ [N m²/rad] (set at its start, moved by its changes)
         session.subscribe(RunStatus, lambda ev: setattr(self.run, "value", run_html(ev.text)))
         session.subscribe(Started, self._started)
         session.subscribe(VerdictNews, lambda ev: self.show(ev.verdict, ev.final, ev.status, ev.start_note))
@@ -124,6 +131,7 @@ class StatusView(pn.viewable.Viewer):
 
     def _applied(self, ev: Applied) -> None:
         how = "softened as scripted" if ev.values.get("scripted") else "applied live"
+        self.gj_nm2 = ev.values.get("gj_nm2", self.gj_nm2)
         self.note.value = f"{how} at t = {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
         if not ev.values.get("scripted"):  # the card's case: the run's start, then the last live change
             self.case = f"{self.case_at_start} · live at {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
@@ -131,7 +139,7 @@ class StatusView(pn.viewable.Viewer):
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict
         self.card.value = verdict_html(verdict, final, status, start_note, self.case)
-        self.badge.value = badge_html(verdict, final)
+        self.badge.value = badge_html(verdict, final, self.gj_nm2)
         if final and status == "numerical-failure":
             self.notify(f"the run failed numerically: {verdict.explanation}")
 

@@ -42,3 +42,23 @@ def test_the_case_line_breaks_between_fields_never_inside_one():
 def test_the_solvers_units_are_written_as_the_page_writes_them():
     html = verdict_html(Verdict("divergence", 0.1, None, 3.0, explanation="since the change to GJ 300 N m^2/rad"), True)
     assert "GJ 300 N m²/rad" in html and "m^2" not in html
+
+
+def test_the_presentation_badge_names_the_gj_its_verdict_was_found_at(dash):
+    """In presentation mode the card is hidden: a class read "stable (final)" beside the header's GJ
+    input as the verdict of the GJ 300 typed after a run at GJ 1500. The badge names the run's GJ,
+    from its start (the nominal blade before a softening) to its last scripted or live change."""
+    from app.events import Applied
+    dash.controls.preset = "fig10"
+    assert dash.start_run()
+    dash.session.stop()
+    status = dash.status
+    assert status.gj_nm2 == 1500.0  # Fig. 10 starts from the nominal blade
+    final = Verdict("stable", -0.55, None, None, explanation="the perturbation decays")
+    status.show(final, True)
+    assert "(final)<br>at GJ 1500 N m²/rad" in status.badge.value
+    status._applied(Applied(dash.session.run_id, {"gj_nm2": 100.0, "scripted": True}, 2.0))
+    status.show(Verdict("divergence", 0.1, None, 3.4, explanation="collapse"), True)
+    assert "(final)<br>at GJ 100 N m²/rad · Ω collapsed at 3.4 s" in status.badge.value
+    dash.controls.gj_nm2 = 300.0  # typed after the run: the badge still names the run's GJ
+    assert "GJ 100 N m²/rad" in status.badge.value and "300" not in status.badge.value
