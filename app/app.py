@@ -78,6 +78,14 @@ def ladder_case_text(c: Controls) -> str:
     return f"{c.run_s:g} s, GJ {c.gj_nm2:.4g} N m²/rad"
 
 
+def teeter_note(model_rad: float, measured_rad: float, amra_rad: float) -> str:
+    """Table 1's comparison, in the paper's radians and the teeter plot's degrees."""
+    def both(x):
+        return f"{x:.3f} rad ({np.degrees(x):.2f}°)"
+    return (f"Teeter amplitude (1/rev, last revolution): this model {both(model_rad)}; measured in flight "
+            f"{both(measured_rad)}; original AMRA {both(amra_rad)}")
+
+
 class Dashboard(pn.viewable.Viewer):
     def __init__(self, settings: Optional[ServerSettings] = None, registry=None, pool=None, run_pool=None,
                  doc=None, **params):
@@ -169,8 +177,7 @@ class Dashboard(pn.viewable.Viewer):
         ref = PRESETS[self._run_preset].teeter_reference_rad
         if ref is not None and len(ev.history):
             beta = teeter_amplitude_rad(ev.history)
-            self.status.note.value = (f"Teeter amplitude (1/rev, last revolution): this model {beta:.3f} rad; "
-                                       f"measured in flight {ref[0]:.3f} rad; original AMRA {ref[1]:.3f} rad")
+            self.status.note.value = teeter_note(beta, *ref)
 
     def reset(self, *_) -> None:
         self.session.forget()

@@ -44,6 +44,13 @@ def _frequency(verdict) -> str:
     return _fmt(verdict.frequency_hz, "Hz")
 
 
+#: the card's words for a verdict's outcome (:data:`amra_core.verdict.OUTCOMES`): "runaway" alone,
+#: on a rotor whose speed was still falling, read as a rotor running away upwards
+OUTCOME_WORDS = {"runaway": "still growing or leaving its start at the end of the run (runaway)",
+                 "neutral": "no measurable growth or decay (neutral)",
+                 "rotor-speed-collapse": "rotor speed collapse"}
+
+
 def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", case: str = "") -> str:
     """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet) of the run
     of ``case`` (a one-line description)."""
@@ -57,7 +64,7 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
     if outcome == "bounded-oscillation" and cycle:
         outcome += " (" + ", ".join(f"{k.replace('_', ' ')} {v:.3g}" for k, v in cycle.items()
                                     if isinstance(v, (int, float))) + ")"
-    rows = [("Outcome", html.escape(outcome.replace("-", " ") or "—")),
+    rows = [("Outcome", html.escape(OUTCOME_WORDS.get(outcome, outcome.replace("-", " ")) or "—")),
             ("Growth rate", _growth(verdict)),
             ("Frequency", _frequency(verdict)),
             ("Collapse time (Ω < 50 % of trim)", _fmt(verdict.collapse_time_s, "s")),

@@ -2,6 +2,8 @@
 close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as messages."""
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -114,9 +116,11 @@ def test_table1_shows_the_teeter_beside_the_flight_measurement(dash, wait):
     dash.start_run()
     pump_until(dash, lambda: dash.last_history is not None, wait, 180, what="the Table 1 run")
     note = dash.status.note.value
-    assert "measured in flight 0.031 rad; original AMRA 0.026 rad" in note
+    # in the paper's radians and the teeter plot's degrees (the note was in rad beside a plot in deg)
+    assert "measured in flight 0.031 rad (1.78°); original AMRA 0.026 rad (1.49°)" in note
     beta = float(note.split("this model ")[1].split(" rad")[0])
-    assert 0.0 < beta < 0.2
+    beta_deg = float(note.split("this model ")[1].split("(")[1].split("°")[0])
+    assert 0.0 < beta < 0.2 and abs(beta_deg - math.degrees(beta)) < 0.06
 
 
 def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):

@@ -62,3 +62,12 @@ def test_the_presentation_badge_names_the_gj_its_verdict_was_found_at(dash):
     assert "(final)<br>at GJ 100 N m²/rad · Ω collapsed at 3.4 s" in status.badge.value
     dash.controls.gj_nm2 = 300.0  # typed after the run: the badge still names the run's GJ
     assert "GJ 100 N m²/rad" in status.badge.value and "300" not in status.badge.value
+
+
+def test_a_runaway_outcome_says_what_ran_away():
+    """ "Outcome runaway" on a rotor slowing after a live change read as a rotor running away
+    upwards; the card says what the outcome means."""
+    html = verdict_html(Verdict("flutter", 0.3, 8.2, None, explanation="growing oscillation", outcome="runaway"), True)
+    assert "still growing or leaving its start at the end of the run (runaway)" in html
+    assert "bounded oscillation" in verdict_html(Verdict("flutter", 0.0, 8.2, None, explanation="limit cycle",
+                                                         outcome="bounded-oscillation"), True)
