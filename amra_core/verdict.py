@@ -120,6 +120,28 @@ def _deviation(h: np.ndarray, cols: dict, axial: bool, omega_ref: float, ref_row
     return np.sqrt(np.sum(d**2, axis=1)), d
 
 
+#: a signal's own growth counts when its deviation at the end is at least this share of the whole's
+GROWING_SIGNAL_MIN_SHARE = 0.05
+SIGNAL_WORDS = {"teeter_rad": "teeter", "tip_twist_0_rad": "tip twist (blade 0)",
+                "tip_twist_1_rad": "tip twist (blade 1)", "omega_rad_s": "rotor speed"}
+
+
+def _growing_signal(t, d, window, amp_end):
+    """(name, growth [1/s]) of the fastest-growing deviation signal, fitted as the whole is, whose end
+    envelope is at least ``GROWING_SIGNAL_MIN_SHARE`` of the whole's; None if none grows beyond
+    ``GROWTH_THRESHOLD_PER_S``. A decaying teeter can hide a slowly growing rotor-speed/inflow mode
+    in the norm (rigid, CG 0.35, GJ 241: the whole -0.13 1/s over 10 s, the rotor speed growing, the
+    map's eigenvalue +0.05 1/s, a 30 s run a limit cycle)."""
+    best = None
+    for k, name in enumerate(SIGNALS):
+        g, end_k, _ = _envelope_fit(t, np.abs(d[:, k]), window)
+        if g is None or g <= GROWTH_THRESHOLD_PER_S or not amp_end or end_k < GROWING_SIGNAL_MIN_SHARE * amp_end:
+            continue
+        if best is None or g > best[1]:
+            best = (SIGNAL_WORDS[name], g)
+    return best
+
+
 def _envelope_fit(t, e, window):
     """(growth rate [1/s] fitted after the first third, last and first envelope values) of ``e``, or
     Nones with fewer than 3 windows."""
@@ -228,14 +250,22 @@ def oscillation_amplitudes(history: np.ndarray, columns, omega_ref: float, axial
     return _limit_cycle(history, cols, d, perturbation_scale, axial)
 
 
-def _headline(v: "Verdict", t, om, omega_ref: float) -> str:
+def _headline(v: "Verdict", t, om, omega_ref: float, failed: bool = False) -> str:
+    """The rotor-speed headline; ``failed``: the run stopped in a numerical failure (an instability's
+    growth judged before it is not a rotor speed kept: "rotor speed kept: 66.9 rad/s at t = 1.2 s"
+    was told of a 10 s run that failed at 1.25 s)."""
     if v.verdict == "numerical-failure":
         return f"rotor speed unknown: the run failed numerically at t = {float(t[-1]):.2f} s"
     if v.collapse_time_s is not None:
         return (f"rotor speed LOST: below 50 % of trim ({0.5 * omega_ref:.1f} rad/s) at t = {v.collapse_time_s:.2f} s")
+    ok = np.isfinite(om) & np.isfinite(t)
+    t, om = t[ok], om[ok]
     if len(om) == 0:
         return "rotor speed: no data"
     end, t_end = float(om[-1]), float(t[-1])
+    if failed:
+        return (f"rotor speed not known to be kept: {end:.1f} rad/s at t = {t_end:.2f} s ({omega_ref:.1f} at the "
+                f"start), when the run failed numerically")
     if v.verdict == "overspeed" and end > 1.5 * omega_ref:
         return f"rotor speed ran away upwards: {end:.1f} rad/s at t = {t_end:.1f} s (start {omega_ref:.1f} rad/s)"
     change = f"{100.0 * (end / omega_ref - 1.0):+.0f}"
@@ -246,6 +276,9 @@ def _headline(v: "Verdict", t, om, omega_ref: float) -> str:
     if v.verdict == "no-autorotation":
         return (f"rotor speed not kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start, "
                 f"{omega_ref:.1f} rad/s), no normal autorotation")
+    if v.verdict == "undetermined" and abs(end / omega_ref - 1.0) > 0.05:  # not "kept" 24 % below its start
+        return (f"rotor speed moved: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start, "
+                f"{omega_ref:.1f} rad/s), not yet steady")
     return f"rotor speed kept: {end:.1f} rad/s at t = {t_end:.1f} s ({change} % of the start, {omega_ref:.1f} rad/s)"
 
 
@@ -284,18 +317,27 @@ def _windmill_brake(h, cols, t, window, v_h):
     return float(vd[0]), vd_end, vd_end / v_h
 
 
-def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
+#: a settled state's descent rate trends over the run's last third by less than this share of its
+#: level, or this many m/s
+SETTLED_DESCENT_SHARE, SETTLED_DESCENT_M_S = 0.03, 0.3
+
+
+def _settle_state(t: np.ndarray, om: np.ndarray, window: float, vd: Optional[np.ndarray] = None):
     """Where the rotor speed of a run that left its start ends up: ``("settled", first row index,
     mean rotor speed)`` when the window-averaged rotor speed over the last third of the run (at
     least 3 windows) trends by less than 1 % of its level and spans less than 4 %, the settled part
-    starting where the window means last came within 3 % of that level (at least 6 windows);
+    starting where the window means last came within 3 % of that level (at least 6 windows), and
+    the descent rate ``vd`` [m/s] trends by less than ``SETTLED_DESCENT_*`` there (a rotor speed
+    "settled" while the descent rate still climbed from 5 to 23 m/s);
     ``("falling", rate)`` when it is still falling faster than that [fraction of the level per s];
-    ``("moving", rate)`` otherwise (still rising, or not yet settled)."""
+    ``("moving", rate)`` otherwise (still rising, or not yet settled), ``("descending", rate
+    [m/s per s])`` when only the descent rate moves."""
     edges = np.arange(t[0], t[-1] + 1e-12, window)
-    starts, centres, means = [], [], []
+    starts, centres, means, vd_means = [], [], [], []
     for a, b, sel, count in _windows(t, edges):
         if count:
             starts.append(_first_index(sel)); centres.append(0.5 * (a + b)); means.append(float(np.mean(om[sel])))
+            vd_means.append(float(np.mean(vd[sel])) if vd is not None else 0.0)
     n_last = max(3, len(means) // 3)
     if len(means) < 2 * n_last:
         return ("moving", float("nan"))
@@ -312,6 +354,10 @@ def _settle_state(t: np.ndarray, om: np.ndarray, window: float):
         k -= 1
     if len(means) - k < 6:
         return ("moving", rate)
+    vd_last = np.array(vd_means[-n_last:])
+    vd_slope = float(np.polyfit(tc, vd_last, 1)[0])
+    if abs(vd_slope) * (tc[-1] - tc[0]) >= max(SETTLED_DESCENT_SHARE * abs(float(vd_last.mean())), SETTLED_DESCENT_M_S):
+        return ("descending", vd_slope)
     return ("settled", int(starts[k]), level)
 
 
@@ -329,7 +375,8 @@ def judge(history: np.ndarray, columns, omega_ref: float, axial: bool, status: s
                hover_induced_m_s, branch)
     cols = {c: i for i, c in enumerate(columns)}
     if len(history):
-        v.rotor_speed = _headline(v, history[:, cols["t_s"]], history[:, cols["omega_rad_s"]], omega_ref)
+        failed = status == "numerical-failure" or not np.isfinite(history).all()
+        v.rotor_speed = _headline(v, history[:, cols["t_s"]], history[:, cols["omega_rad_s"]], omega_ref, failed)
     if v.outcome == "undetermined" and v.verdict != "undetermined":
         if v.collapse_time_s is not None:
             v.outcome = "rotor-speed-collapse"
@@ -438,7 +485,7 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
                        f"the rotor speed went from {om[0]:.1f} to {om[-1]:.1f} rad/s", "runaway")
     if not trimmed:
         drift = (om[0] - om[-1]) / omega_ref
-        state = _settle_state(t, om, window) if abs(drift) > 0.05 else ("none",)
+        state = _settle_state(t, om, window, h[:, cols["descent_rate_m_s"]]) if abs(drift) > 0.05 else ("none",)
         if state[0] == "settled":  # autorotation at another rotor speed: judge the motion there
             _, i0, om_s = state
             sub = h[i0:]
@@ -459,6 +506,14 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
             return Verdict("undetermined", growth, freq, collapse, amp_end,
                            f"the rotor speed moved {100 * abs(drift):.0f} % from the branch end and had not settled "
                            f"by t = {t[-1]:.1f} s: run longer to see where it settles")
+        if state[0] == "descending":
+            vd = h[:, cols["descent_rate_m_s"]]
+            return Verdict("undetermined", growth, freq, collapse, amp_end,
+                           f"no steady autorotation on the trim branch; the rotor speed levelled at "
+                           f"{float(np.mean(om[t >= t[-1] - window])):.2f} rad/s ({100 * abs(drift):.0f} % "
+                           f"{'below' if drift > 0 else 'above'} the branch end), but the descent rate was still "
+                           f"{'rising' if state[1] > 0 else 'falling'} ({vd[0]:.1f} to {vd[-1]:.1f} m/s, "
+                           f"{state[1]:+.2f} m/s per s) at t = {t[-1]:.1f} s: run longer to see where it settles")
         if drift > 0.05:
             return Verdict("no-autorotation", growth, freq, collapse, amp_end,
                            f"no torque equilibrium exists: rotor speed fell {100 * drift:.0f} % from the branch end "
@@ -513,6 +568,14 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
                        + f", but a stable verdict needs at least {STABLE_MIN_FIT_S:.2g} s and {STABLE_MIN_CYCLES} cycles "
                        f"of the dominant motion in the fitted last two thirds: run about "
                        f"{1.5 * STABLE_MIN_FIT_S:.0f} s or longer")
+    growing = _growing_signal(t[:end], d[:end], window, amp_end)
+    if growing is not None:
+        name, g = growing
+        return Verdict("undetermined", g, freq, None, amp_end,
+                       f"undetermined: the perturbation as a whole decays ({growth:+.2f} 1/s), but the {name} "
+                       f"deviation grows ({g:+.3f} 1/s) over the fitted last two thirds: a slow mode under a "
+                       f"decaying faster one; run longer to see whether it stays bounded (the map's eigen-analysis "
+                       f"may call this case unstable)")
     if growth > 0.0:  # below the threshold: not a decay (a map may call so slow a mode unstable)
         return Verdict("stable", growth, freq, None, amp_end,
                        f"no measurable growth: the envelope's fit {growth:+.4f} 1/s is below the "

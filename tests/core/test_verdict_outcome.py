@@ -144,6 +144,10 @@ def test_a_failure_after_seconds_of_growth_is_the_instability_running_away():
     assert v.verdict == "flutter" and v.outcome == "runaway", v
     assert v.growth_rate_per_s == __import__("pytest").approx(1.0, rel=0.1)
     assert "left the model's range" in v.explanation and "t = 8.00 s" in v.explanation
+    # its headline does not say the rotor speed was kept (a 10 s run that failed at 1.25 s read
+    # "rotor speed kept: 66.9 rad/s at t = 1.2 s")
+    assert v.rotor_speed.startswith("rotor speed not known to be kept: 40.0 rad/s at t = 8.00 s"), v.rotor_speed
+    assert v.rotor_speed.endswith("when the run failed numerically")
     d = history(lambda t: 0.01 * np.exp(-0.3 * t))
     t = d[:, C["t_s"]]
     blow = (t >= 7.98) & (t < 8.0)  # the last 20 ms explode by e^100 (finite), then non-finite
@@ -173,3 +177,32 @@ def test_a_numerical_failure_says_how_large_the_motion_was_and_no_unusable_advic
     assert v.verdict == "numerical-failure", v
     assert "at t = 0.20 s" in v.explanation and "tip twist reached 35 deg" in v.explanation, v.explanation
     assert "SolverSettings.dt_s" in v.explanation and "try a smaller dt_s" not in v.explanation
+
+
+def test_a_slow_growth_under_a_decaying_oscillation_is_not_called_stable():
+    """Rigid, CG 0.35, GJ 241 (a map's unstable inflow/rotor-speed mode, +0.05 1/s): over 10 s the
+    decaying teeter dominated the deviation's norm (-0.13 1/s) and the run was called stable; 30 s
+    later it was a limit cycle. Built here: a 12 Hz teeter decaying at -0.3 1/s over a 0.23 Hz rotor
+    speed swing growing at +0.06 1/s. The rotor speed's own fit finds the growth."""
+    grow = 0.06
+    h = history(lambda t: 0.01 * np.exp(-0.3 * t),
+                omega=lambda t: OM0 * (1 + 2e-4 * np.exp(grow * t) * np.sin(2 * math.pi * 0.23 * t)), t_end=10.0)
+    v = run_judge(h)
+    assert v.verdict == "undetermined" and "rotor speed deviation grows" in v.explanation, v
+    # the reported growth is the rotor speed's own fit (per revolution peaks of a 0.23 Hz swing over
+    # two cycles: its sign and order, not its digits)
+    assert 0.02 < v.growth_rate_per_s < 0.2
+    # without the slow growth the same run is stable
+    assert run_judge(history(lambda t: 0.01 * np.exp(-0.3 * t), t_end=10.0)).verdict == "stable"
+
+
+def test_an_untrimmed_run_whose_descent_still_climbs_is_undetermined_not_settled():
+    """Forward flight, no trim: the rotor speed levels 27 % below the branch end while the descent
+    rate climbs at 3 m/s per s (a glide steepening; in axial flight this is the windmill-brake
+    check's). It was called "settled" with an outcome "runaway" and a headline "rotor speed kept"."""
+    h = history(lambda t: 0.01 * np.exp(-0.3 * t), omega=lambda t: OM0 * (0.73 + 0.27 * np.exp(-t / 0.8)), t_end=6.0)
+    h[:, C["descent_rate_m_s"]] = 5.0 + 3.0 * h[:, C["t_s"]]
+    v = judge(h, HISTORY_COLUMNS, OM0, False, "finished", False, h[0].copy(), 0.01, hover_induced_m_s=V_H)
+    assert v.verdict == "undetermined" and v.outcome == "undetermined", v
+    assert "the descent rate was still rising (5.0 to 23.0 m/s, +3.00 m/s per s)" in v.explanation, v.explanation
+    assert v.rotor_speed.startswith("rotor speed moved: 29.2 rad/s") and "not yet steady" in v.rotor_speed, v.rotor_speed

@@ -66,3 +66,16 @@ def test_the_settled_rotor_speed_starts_at_the_same_row():
     assert state[1] in [int(s[0]) for s in starts if len(s)]  # a window's first row, as defined
     means = [float(np.mean(om[s])) for s in starts if len(s)]
     assert state[2] == pytest.approx(np.mean(means[-max(3, len(means) // 3):]), rel=0, abs=0)
+
+
+def test_a_rotor_speed_levelled_while_the_descent_rate_climbs_has_not_settled():
+    """GJ 300, CG 35 %, mu 0.1, fem-torsion, 6 s: the rotor speed levelled at 20 rad/s while the
+    descent rate still climbed from 5 to 23 m/s, and the verdict said the rotor speed "settled ...
+    at 20.03 rad/s" with an outcome "runaway". Settled needs the descent rate steady too."""
+    rng = np.random.default_rng(3)
+    t = _times(rng, 30000)
+    om = 20.0 + 7.0 * np.exp(-t / 0.8) + 1e-4 * rng.standard_normal(len(t))
+    assert vd._settle_state(t, om, 0.18, np.full(len(t), 8.0))[0] == "settled"
+    climbing = 5.0 + 3.0 * t
+    state = vd._settle_state(t, om, 0.18, climbing)
+    assert state[0] == "descending" and state[1] == pytest.approx(3.0, rel=0.01)
