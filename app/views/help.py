@@ -62,6 +62,11 @@ def help_markdown(controls=None) -> str:
         "so its oscillation's growth rate is negative while the rotor is lost: read the verdict and the "
         "collapse time, not the sign alone. Likewise in forward flight a Floquet exponent's frequency is "
         "only defined modulo the rotor frequency.",
+        "### Two growth rates",
+        "The map and the Modes tab give the **eigenvalue's** growth rate: how fast a small disturbance of "
+        "the trimmed state grows at first. The run's card gives the **run's fit**: the envelope of the "
+        "simulated motion over the run's last two thirds. A flutter that saturates into a limit cycle has an "
+        "eigenvalue of, say, +0.97 1/s and a run's fit near 0 1/s: both are right, about different things.",
         "### Where this comes from",
         f"The model re-implements Trchalík, Gillies & Thomson (2008), *Development of an aeroelastic stability "
         f"boundary for a rotor in autorotation* ([the paper]({PAPER_URL})). How this model compares with "

@@ -260,7 +260,7 @@ class MapView(pn.viewable.Viewer):
             class_items.append(LegendItem(label=cls, renderers=[r]))
         fig.add_tools(HoverTool(renderers=cells, tooltips=[
             ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
-            ("verdict", "@verdict"), ("growth rate", "@growth_text")]))
+            ("verdict", "@verdict"), ("growth rate (eigenvalue)", "@growth_text")]))
         band = {"left": "left", "right": "right", "bottom": "bottom", "top": "top"}
         strong = fig.add_glyph(self.band_sources["strong"], Quad(**band, fill_color="#c62828", fill_alpha=0.35,
                                                                  line_color="#c62828"))

@@ -65,7 +65,9 @@ def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", c
         outcome += " (" + ", ".join(f"{k.replace('_', ' ')} {v:.3g}" for k, v in cycle.items()
                                     if isinstance(v, (int, float))) + ")"
     rows = [("Outcome", html.escape(OUTCOME_WORDS.get(outcome, outcome.replace("-", " ")) or "—")),
-            ("Growth rate", _growth(verdict)),
+            # the envelope's fit over the run, not the linear eigenvalue the map and the Modes tab show
+            # (a limit cycle fits ~0 where the mode's real part is +0.97 1/s): named apart
+            ("Growth rate (run's fit)", _growth(verdict)),
             ("Frequency", _frequency(verdict)),
             ("Collapse time (Ω < 50 % of trim)", _fmt(verdict.collapse_time_s, "s")),
             ("Solver status", html.escape(status or "—"))]

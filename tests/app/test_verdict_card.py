@@ -71,3 +71,15 @@ def test_a_runaway_outcome_says_what_ran_away():
     assert "still growing or leaving its start at the end of the run (runaway)" in html
     assert "bounded oscillation" in verdict_html(Verdict("flutter", 0.0, 8.2, None, explanation="limit cycle",
                                                          outcome="bounded-oscillation"), True)
+
+
+def test_the_card_and_the_map_name_their_growth_rates_apart():
+    """A map cell at +0.971 1/s (eigenvalue) ran as a limit cycle with "Growth rate 0.0186 1/s" on the
+    card: one label for two numbers 50 times apart. Each is named for what it is."""
+    html = verdict_html(Verdict("flutter", 0.0186, 10.1, None, explanation="limit cycle", outcome="bounded-oscillation"),
+                        True)
+    assert "Growth rate (run's fit)" in html
+    # the map's hover says "growth rate (eigenvalue)" (tests/app/test_view_fixes.py), the Help tab why
+    from app.controls import Controls
+    from app.views.help import help_pane
+    assert "Two growth rates" in help_pane(Controls()).object

@@ -43,8 +43,8 @@ def test_the_map_hover_writes_a_dash_for_a_cell_without_a_growth_rate():
     fig = view.figure()
     view.cells_source.stream(cell_columns([_cell(0.2, 41.0, "windmill-brake", None),
                                            _cell(0.4, 1500.0, "stable", -0.1234)]))
-    (hover,) = [h for h in fig.select({"type": HoverTool}) if "growth rate" in dict(h.tooltips)]
-    field = re.fullmatch(r"@\{?(\w+)\}?", dict(hover.tooltips)["growth rate"])  # a text column, as it is
+    (hover,) = [h for h in fig.select({"type": HoverTool}) if "growth rate (eigenvalue)" in dict(h.tooltips)]
+    field = re.fullmatch(r"@\{?(\w+)\}?", dict(hover.tooltips)["growth rate (eigenvalue)"])  # a text column, as it is
     assert field is not None, hover.tooltips
     assert list(view.cells_source.data[field[1]]) == ["—", "-0.123 1/s"]
 
