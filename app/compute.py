@@ -115,9 +115,19 @@ def locus_text(pts: list) -> str:
             worst = max((p.max_real_part_per_s for p in again if p.max_real_part_per_s is not None), default=None)
             text += (f"; trims again at GJ {min(p.gj_nm2 for p in again):.4g}-{max(p.gj_nm2 for p in again):.4g} "
                      f"N m²/rad, cut off from the branch" + (f" (σ up to {worst:+.3g} 1/s)" if worst is not None else ""))
-    unstable = [p.gj_nm2 for p in down[:top] if not p.stable]
-    if unstable:
-        text += f"; unstable trims on the branch at GJ ≤ {max(unstable):.4g} N m²/rad"
+    # the unstable stretches of the branch, each from its lowest to its highest point (one "GJ <= 667.8"
+    # read as unstable all the way down, over the stable 416-623 of fem-coupled CG 40 %)
+    runs, run = [], []
+    for p in down[:top]:
+        if not p.stable:
+            run.append(p.gj_nm2)
+        elif run:
+            runs.append(run); run = []
+    if run:
+        runs.append(run)
+    if runs:
+        spans = [f"{r[-1]:.4g}-{r[0]:.4g}" if len(r) > 1 else f"{r[0]:.4g}" for r in reversed(runs)]
+        text += f"; unstable trims on the branch at GJ {', '.join(spans)} N m²/rad (the locus's grid points)"
     return text
 
 

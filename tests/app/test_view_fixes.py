@@ -165,7 +165,20 @@ def test_the_locus_summary_puts_the_fold_where_the_branch_ends_not_at_a_lower_is
     text = locus_text(pts)
     assert "no trim (fold) below about 706 N m²/rad" in text
     assert "trims again at GJ 50-78.75 N m²/rad, cut off from the branch (σ up to +248 1/s)" in text
-    assert "unstable trims on the branch at GJ ≤ 800 N m²/rad" in text
+    assert "unstable trims on the branch at GJ 706-800 N m²/rad" in text
+
+
+def test_the_locus_summary_gives_the_unstable_stretches_not_everything_below_the_highest():
+    """fem-coupled, CG 40 %: "unstable trims on the branch at GJ ≤ 667.8" read as unstable all the way
+    down, while the map's cells at 416-623 are stable and only 633-668 flutters."""
+    from app.compute import LocusPoint, locus_text
+    pts = [LocusPoint(g, True, (), -0.5, True) for g in (3000.0, 1200.0, 700.0)]
+    pts += [LocusPoint(g, True, (), 0.9, False) for g in (667.8, 640.0)]
+    pts += [LocusPoint(g, True, (), -0.4, True) for g in (600.0, 450.0)]
+    pts += [LocusPoint(300.0, True, (), 0.2, False), LocusPoint(200.0, False, (), None, False)]
+    text = locus_text(pts)
+    assert "unstable trims on the branch at GJ 300, 640-667.8 N m²/rad (the locus's grid points)" in text
+    assert "≤" not in text
 
 
 def test_the_least_damped_plot_keeps_its_own_real_part_range():
