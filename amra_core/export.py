@@ -49,7 +49,7 @@ def file_name(kind: str, *, case: str = "", fidelity: str = "", gj_nm2: float | 
 def header_lines(meta: Mapping[str, object]) -> list[str]:
     """``# key: value`` lines: the solver version first, then ``meta`` in its order."""
     lines = [f"# AMRA {__version__}"]
-    lines += [f"# {k}: {_fmt(v)}" for k, v in meta.items()]
+    lines += [f"# {k}: " + str(_fmt(v)).replace("\n", " ") for k, v in meta.items()]  # one line each
     return lines
 
 
@@ -86,4 +86,20 @@ def case_meta(case, changes: Iterable[str] = (), verdict: str | None = None) -> 
         meta[f"change {i + 1}"] = text
     if verdict:
         meta["verdict"] = verdict
+    return meta
+
+
+def run_meta(sim, verdict=None) -> dict:
+    """A run's header: its case and changes (:func:`case_meta`), how it started (from a trim, or from
+    a branch end with the parameters switched on at t = 0: read alone, t = 0 looked like a trim of
+    the case) and its ``verdict`` (an :class:`amra_core.verdict.Verdict`: class, outcome, the run's
+    fitted growth rate, frequency, collapse time, rotor-speed headline)."""
+    meta = case_meta(sim.case, [what for _, _, what in sim.changes])
+    meta["start"] = sim.start_note
+    if verdict is not None:
+        meta |= {"verdict": verdict.verdict, "outcome": verdict.outcome,
+                 "growth_rate_per_s (run's fit)": "" if verdict.growth_rate_per_s is None else verdict.growth_rate_per_s,
+                 "frequency_hz": "" if verdict.frequency_hz is None else verdict.frequency_hz,
+                 "collapse_time_s": "" if verdict.collapse_time_s is None else verdict.collapse_time_s,
+                 "rotor_speed": verdict.rotor_speed, "explanation": verdict.explanation}
     return meta

@@ -367,11 +367,12 @@ class Simulation:
             self._change_trim = (n, trim(self.model))
         return self._change_trim[1]
 
-    def to_csv(self, path, verdict: Optional[str] = None) -> None:
-        """The full-resolution history, with the case, its live changes and the solver version in
-        ``#`` header lines (:mod:`amra_core.export`)."""
-        from .export import case_meta, table_csv
-        meta = case_meta(self.case, [what for _, _, what in self.changes], verdict)
+    def to_csv(self, path, verdict=None) -> None:
+        """The full-resolution history, with the case, its live changes, its start, its ``verdict``
+        (a :class:`~amra_core.verdict.Verdict`) and the solver version in ``#`` header lines
+        (:func:`amra_core.export.run_meta`)."""
+        from .export import run_meta, table_csv
+        meta = run_meta(self, verdict)
         with open(path, "w", encoding="utf-8") as fh:
             fh.write(table_csv(HISTORY_COLUMNS, self.history, meta))
 

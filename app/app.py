@@ -308,8 +308,7 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ exports
     def history_csv(self):
-        verdict = self.status.verdict.verdict if self.status.verdict is not None else None
-        return exports.history_csv(self.session.sim, self.last_history, verdict)
+        return exports.history_csv(self.session.sim, self.last_history, self.status.verdict)
 
     def modes_csv(self):
         return exports.modes_csv(self.modes.frame, self.controls, self.modes.about)

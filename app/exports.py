@@ -13,17 +13,18 @@ import numpy as np
 import pandas as pd
 import panel as pn
 
-from amra_core.export import case_meta, file_name, table_csv
+from amra_core.export import file_name, run_meta, table_csv
 from amra_core.simulation import HISTORY_COLUMNS
 
 LABELS = {"history": "Time histories (CSV)", "modes": "Mode table (CSV)", "map": "Boundary map (CSV)"}
 
 
-def history_csv(sim, history: np.ndarray | None = None, verdict: str | None = None) -> io.StringIO:
+def history_csv(sim, history: np.ndarray | None = None, verdict=None) -> io.StringIO:
     """The full-resolution history of ``sim`` (a Simulation; ``history`` overrides its rows):
-    columns :data:`HISTORY_COLUMNS` (SI units in the names), the case and its changes above."""
+    columns :data:`HISTORY_COLUMNS` (SI units in the names), the case, its changes, its start and
+    its ``verdict`` (a Verdict) above."""
     h = history if history is not None else (sim.history if sim is not None else np.zeros((0, len(HISTORY_COLUMNS))))
-    meta = case_meta(sim.case, [what for _, _, what in sim.changes], verdict) if sim is not None else {}
+    meta = run_meta(sim, verdict) if sim is not None else {}
     return io.StringIO(table_csv(HISTORY_COLUMNS, h, meta))
 
 

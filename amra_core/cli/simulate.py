@@ -107,7 +107,7 @@ def _report(args, sim, t0, extra=None):
         "fidelity": settings.fidelity, "aero": settings.aero,
     } | (extra or {})
     if args.out:
-        sim.to_csv(args.out, verdict=v.verdict)
+        sim.to_csv(args.out, verdict=v)
         out["csv"] = args.out
     out = {k: (None if isinstance(val, float) and not math.isfinite(val) else val) for k, val in out.items()}
     emit(out, args.json)

@@ -33,6 +33,11 @@ def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     csv = dash.history_csv().getvalue().splitlines()
     meta = [ln for ln in csv if ln.startswith("# ")]
     assert meta[0].startswith("# AMRA ") and "# fidelity: rigid" in meta and "# verdict: undetermined" in meta
+    # how the run started and what its verdict says, beside the rows (an untrimmed run's t = 0 read
+    # as a trim of the case)
+    assert "# start: started from the trimmed steady autorotation plus the perturbation" in meta
+    assert "# outcome: undetermined" in meta and any(ln.startswith("# growth_rate_per_s (run's fit): ") for ln in meta)
+    assert any(ln.startswith("# rotor_speed: rotor speed kept") for ln in meta)
     assert csv[len(meta)] == ",".join(HISTORY_COLUMNS) and len(csv) == len(meta) + len(dash.last_history) + 1
     assert dash.exports.buttons["history"].filename == "amra-paper-boundary-rigid-gj1500-cg40-history.csv"
 

@@ -130,6 +130,7 @@ def test_simulate_csv_header_carries_units(simulate_run):
     assert lines[:len(meta)] == meta  # the case's parameters first, as "# key: value" lines
     assert meta[0].startswith("# AMRA ") and "# rotor: mccutcheon" in "\n".join(meta)
     assert any(ln.startswith("# fidelity: rigid") for ln in meta) and any(ln.startswith("# verdict: ") for ln in meta)
+    assert any(ln.startswith("# start: ") for ln in meta) and any(ln.startswith("# outcome: ") for ln in meta)
     header = next(csv.reader([lines[len(meta)]]))
     assert tuple(header) == HISTORY_COLUMNS
     for name in header:
