@@ -28,12 +28,18 @@ def _fmt(v) -> str:
 
 
 def file_name(kind: str, *, case: str = "", fidelity: str = "", gj_nm2: float | None = None,
-              cg_pct: float | None = None, mu: float | None = None, extension: str = "csv") -> str:
-    """``amra-fig10-rigid-gj100-cg40.csv``-style names: the kind or case label, fidelity, GJ
-    [N m^2/rad], CG [% chord] and, in forward flight, mu; characters outside [a-z0-9.-] dropped."""
+              cg_pct: float | None = None, mu: float | None = None, ea_pct: float | None = None,
+              aero: str = "", extension: str = "csv") -> str:
+    """``amra-fig10-rigid-gj100-cg40.csv``-style names: the kind or case label, fidelity, aero model,
+    EA [% chord], GJ [N m^2/rad], CG [% chord] and, in forward flight, mu; characters outside
+    [a-z0-9.-] dropped."""
     parts = ["amra", case or kind]
     if fidelity:
         parts.append(fidelity)
+    if aero:
+        parts.append(aero)
+    if ea_pct is not None:
+        parts.append(f"ea{ea_pct:.3g}")
     if gj_nm2 is not None:
         parts.append(f"gj{gj_nm2:.4g}")
     if cg_pct is not None:

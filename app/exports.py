@@ -43,7 +43,8 @@ def names_for(c) -> dict:
     case = c.preset if c.preset != "custom" else c.rotor
     common = dict(case=case, fidelity=c.fidelity, gj_nm2=float(c.gj_nm2), cg_pct=float(c.cg_pct), mu=float(c.mu))
     return {"history": file_name("history", **common), "modes": file_name("modes", **common),
-            "map": file_name("map", case=case, fidelity=c.fidelity, mu=float(c.mu))}
+            # a map is one per EA and aero model as well (two EAs downloaded under one name)
+            "map": file_name("map", case=case, fidelity=c.fidelity, aero=c.aero, ea_pct=float(c.ea_pct), mu=float(c.mu))}
 
 
 class ExportBar:

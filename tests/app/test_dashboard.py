@@ -40,6 +40,8 @@ def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     assert any(ln.startswith("# rotor_speed: rotor speed kept") for ln in meta)
     assert csv[len(meta)] == ",".join(HISTORY_COLUMNS) and len(csv) == len(meta) + len(dash.last_history) + 1
     assert dash.exports.buttons["history"].filename == "amra-paper-boundary-rigid-gj1500-cg40-history.csv"
+    from app.exports import names_for  # a map per EA and aero model: two EAs were one file name
+    assert names_for(dash.controls)["map"] == "amra-paper-boundary-rigid-theodorsen-ea32-map.csv"
 
 
 def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
