@@ -9,6 +9,7 @@ validation (``SettingsError``, ``RotorError``) then names anything the bounds ca
 """
 from __future__ import annotations
 
+import json
 import math
 import urllib.parse
 from dataclasses import dataclass
@@ -351,11 +352,26 @@ def sync_url(controls: Controls, location=None) -> None:
     loc.sync(controls, {k: v for k, v in URL_KEYS.items() if k != "preset"}, on_error=lambda bad: None)
 
     # the preset one way only, so a copied link reopens as the preset it shows (the URL kept the
-    # opening link's preset=fig10 after Fig. 12 was chosen, and the link opened as a custom case)
+    # opening link's preset=fig10 after Fig. 12 was chosen, and the link opened as a custom case).
+    # With every synced value as it is now, serialised as Location writes them: an edit that leaves a
+    # preset changes the preset inside the edit's own watchers, before Location has written the
+    # edited value, and a query holding the old value was read back (a GJ typed over the nominal
+    # preset's went back to 1500)
     def write_preset(*_):
-        loc.update_query(preset=controls.preset)
-    controls.param.watch(write_preset, list(URL_KEYS))
+        loc.update_query(preset=controls.preset, **url_values(controls))
+    controls.param.watch(write_preset, "preset")
     write_preset()
+
+
+def url_values(controls: Controls) -> dict:
+    """Every synced control's URL value as ``Location.sync`` writes it (the parameter's own
+    serialisation, JSON text unless already a string)."""
+    out = {}
+    for name, key in URL_KEYS.items():
+        if name != "preset":
+            v = controls.param[name].serialize(getattr(controls, name))
+            out[key] = v if isinstance(v, str) else json.dumps(v)
+    return out
 
 
 # ---------------------------------------------------------------------------------------- rotor files

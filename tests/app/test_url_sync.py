@@ -85,3 +85,20 @@ def test_a_links_bad_values_are_named_in_the_inputs_words_in_one_message():
     report_link_errors(msgs, shown.append)
     assert len(shown) == 1 and shown[0].startswith("7 values of this link were ignored")
     assert all(m in shown[0] for m in msgs)
+
+
+def test_an_edit_that_leaves_a_preset_keeps_the_edited_value():
+    """GJ typed over the nominal preset's went back to 1500: leaving the preset wrote the preset to
+    the URL inside the edit's own watchers, before Location had written the new GJ, and Location read
+    the query back with the old one."""
+    from panel.io.location import Location
+    from app.controls import sync_url
+    c, loc = Controls(preset="nominal"), Location(search="?preset=nominal")
+    sync_url(c, location=loc)
+    c.gj_nm2 = 700.0
+    assert (c.preset, c.gj_nm2) == ("custom", 700.0)
+    q = parse_query(loc.search)
+    assert q["preset"] == "custom" and q["gj"] == 700.0
+    c.preset = "fig12"  # and a preset chosen afterwards sets its values and the URL
+    q = parse_query(loc.search)
+    assert (c.gj_nm2, c.mu) == (300.0, 0.1) and (q["preset"], q["gj"], q["mu"]) == ("fig12", 300.0, 0.1)
