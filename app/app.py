@@ -242,8 +242,13 @@ class Dashboard(pn.viewable.Viewer):
         return rotor == UPLOADED and self.uploaded is None
 
     def _chosen_file(self, upload: pn.widgets.FileInput) -> None:
-        """A file was chosen: read it (an empty one arrives as no value, and is named as empty)."""
-        self.upload(upload.value or b"", upload.filename or "upload.toml")
+        """A file was chosen: read it (an empty one arrives as no value, and is named as empty). A
+        rejected file is cleared from the widget, so it does not stand there as if in use; the
+        clearing's own echo (no name) is no choice."""
+        if not upload.filename:
+            return
+        if not self.upload(upload.value or b"", upload.filename):
+            upload.clear()
 
     def load_cell(self, cell) -> None:
         gj = float(f"{cell.gj_nm2:.3g}")  # the grid's resolution, not 487.58387005217355

@@ -3,6 +3,7 @@ close, verdicts, modes/locus/fan analyses, map cells, exports, bad input as mess
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -208,7 +209,6 @@ def test_bad_input_becomes_a_message_and_the_session_keeps_working(dash, wait):
 
 
 def test_uploaded_rotor_is_used(dash):
-    from pathlib import Path
     data = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
     assert dash.upload(data, "mine.toml")
     assert dash.controls.rotor == "uploaded file" and dash.controls.case(dash.uploaded).rotor.name == "mccutcheon"
@@ -218,7 +218,6 @@ def test_uploaded_rotor_is_used(dash):
 def test_a_failed_upload_says_which_rotor_stays_in_use(dash):
     """After a good file, a broken one left the select on "uploaded file" with nothing saying that the
     earlier file was still the rotor."""
-    from pathlib import Path
     good = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
     assert dash.upload(good, "good.toml")
     assert not dash.upload(b"radius_m = [", "broken.toml")
@@ -248,6 +247,22 @@ def test_an_empty_file_is_named_as_empty(dash):
     upload.param.update(filename="empty.toml")
     assert dash.messages[-1] == ("error", "rotor file 'empty.toml' is empty; the rotor stays paper-boundary")
     assert dash.uploaded is None
+
+
+def test_a_rejected_file_is_cleared_from_the_input_and_its_clearing_is_no_new_choice(dash, monkeypatch):
+    """A rejected file stood in the input as if in use (the message said another rotor stayed)."""
+    import panel as pn
+    upload = next(o for o in dash.sidebar().select(pn.widgets.FileInput))
+    cleared = []
+    monkeypatch.setattr(upload, "clear", lambda: cleared.append(True))
+    upload.param.update(value=b"radius_m = [", filename="broken.toml")
+    assert cleared == [True]
+    n = len(dash.messages)
+    upload.param.update(value=None, filename=None)  # the browser's echo of the clearing
+    assert len(dash.messages) == n and dash.uploaded is None
+    good = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
+    upload.param.update(value=good, filename="good.toml")
+    assert cleared == [True] and dash.uploaded is not None
 
 
 def test_the_page_builds_with_lazy_tabs_and_the_test_hooks(dash):
@@ -378,7 +393,6 @@ def test_map_boundaries_and_bands_from_the_columns():
 
 
 def test_an_uploaded_rotor_says_its_own_values_are_overridden(dash):
-    from pathlib import Path
     data = (Path(__file__).resolve().parents[2] / "assets" / "rotors" / "mccutcheon.toml").read_bytes()
     assert dash.upload(data, "mine.toml")
     level, text = dash.messages[-1]

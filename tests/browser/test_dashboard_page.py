@@ -283,6 +283,9 @@ def test_a_broken_rotor_file_shows_a_message_and_the_session_keeps_working(watch
     page.locator(".amra-upload input[type='file']").set_input_files(
         {"name": "broken.toml", "mimeType": "application/toml", "buffer": b"name = [this is not toml"})
     expect(page.get_by_text(re.compile("broken.toml.*not valid TOML")).first).to_be_visible(timeout=20_000)
+    # the rejected file is cleared from the input: it does not stand there as if in use
+    file_input = page.locator(".amra-upload input[type='file']")
+    wait_for(lambda: file_input.evaluate("el => el.files.length") == 0, 20, what="the rejected file to be cleared")
     shot(page, "07-broken-rotor-file")
     page.locator(".amra-run button").click()
     wait_for(lambda: streamed(page)[0] > 0, 60, what="a run after the bad upload")
