@@ -8,6 +8,8 @@ from app.views.status import verdict_html
 def test_a_run_without_a_resolved_oscillation_says_so():
     html = verdict_html(Verdict("stable", -0.55, None, None, explanation="the perturbation decays"), True)
     assert "none resolved" in html and "0.1 Hz" not in html
+    # beside a forward-flight run's visible 1/rev teeter, the card says that motion is the trim's own
+    assert "once-per-revolution motion is not a departure" in html
 
 
 def test_a_resolved_frequency_is_shown_with_its_unit():
