@@ -108,13 +108,19 @@ def locus_text(pts: list) -> str:
     down = sorted(pts, key=lambda p: -p.gj_nm2)
     top = next((i for i, p in enumerate(down) if not p.trimmed), len(down))  # the branch from the top
     if top < len(down):
-        fold = down[top - 1].gj_nm2 if top else math.nan
-        text += f"; no trim (fold) below about {fold:.4g} N m²/rad"
+        if top:  # with the bracket: the locus walks to 5 %, the map and the preset cards to 2 % (Fig. 10's
+            # card says "≈ 414" where the locus said only "about 424")
+            fold = down[top - 1].gj_nm2
+            text += (f"; no trim (fold) below about {fold:.4g} N m²/rad (it lies between the locus's grid "
+                     f"points {down[top].gj_nm2:.4g} and {fold:.4g})")
+        else:  # ("below about nan" before)
+            text += f"; no trim at the stiff end, GJ {down[0].gj_nm2:.4g} N m²/rad"
         again = [p for p in down[top:] if p.trimmed]
         if again:
             worst = max((p.max_real_part_per_s for p in again if p.max_real_part_per_s is not None), default=None)
-            text += (f"; trims again at GJ {min(p.gj_nm2 for p in again):.4g}-{max(p.gj_nm2 for p in again):.4g} "
-                     f"N m²/rad, cut off from the branch" + (f" (σ up to {worst:+.3g} 1/s)" if worst is not None else ""))
+            lo, hi = min(p.gj_nm2 for p in again), max(p.gj_nm2 for p in again)
+            text += (f"; trims again at GJ {lo:.4g}" + (f"-{hi:.4g}" if hi > lo else "") +
+                     " N m²/rad, cut off from the branch" + (f" (σ up to {worst:+.3g} 1/s)" if worst is not None else ""))
     # the unstable stretches of the branch, each from its lowest to its highest point (one "GJ <= 667.8"
     # read as unstable all the way down, over the stable 416-623 of fem-coupled CG 40 %)
     runs, run = [], []

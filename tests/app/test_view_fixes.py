@@ -163,9 +163,17 @@ def test_the_locus_summary_puts_the_fold_where_the_branch_ends_not_at_a_lower_is
     pts += [LocusPoint(g, False, (), None, False) for g in (680.0, 300.0, 81.0)]
     pts += [LocusPoint(78.75, True, (), 218.0, False), LocusPoint(50.0, True, (), 248.0, False)]
     text = locus_text(pts)
-    assert "no trim (fold) below about 706 N m²/rad" in text
+    assert "no trim (fold) below about 706 N m²/rad (it lies between the locus's grid points 680 and 706)" in text
     assert "trims again at GJ 50-78.75 N m²/rad, cut off from the branch (σ up to +248 1/s)" in text
     assert "unstable trims on the branch at GJ 706-800 N m²/rad" in text
+
+
+def test_a_locus_with_no_trim_at_its_stiff_end_says_so_not_nan():
+    from app.compute import LocusPoint, locus_text
+    pts = [LocusPoint(g, False, (), None, False) for g in (3000.0, 1000.0)] + [LocusPoint(500.0, True, (), -0.2, True)]
+    text = locus_text(pts)
+    assert "no trim at the stiff end, GJ 3000 N m²/rad" in text and "nan" not in text
+    assert "trims again at GJ 500 N m²/rad, cut off" in text
 
 
 def test_the_locus_summary_gives_the_unstable_stretches_not_everything_below_the_highest():
