@@ -71,6 +71,17 @@ def case_label(c: Controls, scenario) -> str:
     return " · ".join([name] + [f.replace(" ", "\u00a0") for f in fields])
 
 
+def map_elsewhere(c: Controls) -> str:
+    """How the case's flight differs from its map's (maps have an advance ratio and a free rotor speed
+    only), or "" when the map is the case's."""
+    parts = ([f"it flies at {c.airspeed_m_s:g} m/s"] if c.airspeed_m_s else []) + (
+        [f"its rotor speed is held at {c.omega_hold_rad_s:g} rad/s"] if c.omega_hold_rad_s else [])
+    if not parts:
+        return ""
+    return (f"this case is not on the map: {' and '.join(parts)}, while the map is at μ {c.mu:g} with a free "
+            f"rotor speed (a map has no airspeed or held rotor speed; set μ and Airspeed 0 to map a forward flight)")
+
+
 def ladder_case_text(c: Controls) -> str:
     """What the ladder runs, in words: the case, and its softening when there is one."""
     if c.soften_at_s:
@@ -251,11 +262,15 @@ class Dashboard(pn.viewable.Viewer):
             upload.clear()
 
     def load_cell(self, cell) -> None:
+        """A map cell as the case: its CG and GJ, run from its own trim. A preset's softening stays off
+        (after Fig. 10 a cell at GJ 1720 ran as "GJ 1500 → 1720 at 2 s", not the case the map classified)."""
         gj = float(f"{cell.gj_nm2:.3g}")  # the grid's resolution, not 487.58387005217355
-        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 1), gj_nm2=gj)
+        softened = self.controls.soften_at_s
+        self.controls.param.update(cg_pct=round(100.0 * cell.cg, 1), gj_nm2=gj, soften_at_s=0.0)
         self.status.show(None, False)  # the card spoke of another case
         self.notify(f"loaded map cell CG {100 * cell.cg:.1f} % chord, GJ {gj:g} N m²/rad "
-                    f"({cell.verdict}); press Run to simulate it", "info")
+                    f"({cell.verdict}); press Run to simulate it" +
+                    (f" from its own trim ('Soften at {softened:g} s' set to 0)" if softened else ""), "info")
 
     # ------------------------------------------------------------------ parameter changes
     def _on_live(self, *events) -> None:
@@ -292,7 +307,7 @@ class Dashboard(pn.viewable.Viewer):
         names = exports.names_for(c)
         self.exports.rename({"modes": names["modes"], "map": names["map"]})
         if self.map is not None:
-            self.map.mark(c.cg_pct, c.gj_nm2)
+            self.map.mark(c.cg_pct, c.gj_nm2, map_elsewhere(c))
         if self._file_missing(c.rotor):
             return  # no case yet: _rotor_needs_its_file puts a rotor back, which refreshes again
         parts = self._parts()

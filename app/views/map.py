@@ -141,6 +141,7 @@ class MapView(pn.viewable.Viewer):
         self.progress = pn.indicators.Progress(value=0, max=100, sizing_mode="stretch_width", label="map-progress",
                                                bar_color="info")
         self.status = text("Map: waiting ...", "amra-map-status")
+        self.elsewhere = ""  #: how the current case's flight differs from the map's (see mark)
         self._lines_key = None
         self.eta = Eta()
         self.ea_source = ColumnDataSource({"x": [32.0]})
@@ -188,6 +189,8 @@ class MapView(pn.viewable.Viewer):
                  "busy": snap["error"]}[snap["state"]]
         line = (f"<b>Map</b> ({spec.fidelity}, {spec.aero}, EA {100 * spec.ea:.1f} %, μ {spec.mu:g}): "
                 f"{html.escape(state)}; {snap['n']} cells ({snap['cached']} from the store) of about {total}{eta}")
+        if self.elsewhere:
+            line += f"<br><b>Not this case's flight:</b> {html.escape(self.elsewhere)}"
         if snap.get("notice"):  # the store could not be used or written (app.server.map_jobs.open_store)
             line += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
         self.status.value = line
@@ -231,8 +234,14 @@ class MapView(pn.viewable.Viewer):
                          + ("the top of the range" if open_top else f"{hi:.0f}") + " N m²/rad"))
         self.sens_source.data = {k: [r[i] for r in rows] for i, k in enumerate(("cg_pct", "lo", "hi", "text"))}
 
-    def mark(self, cg_pct: float, gj: float) -> None:
-        self.marker_source.data = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]}
+    def mark(self, cg_pct: float, gj: float, elsewhere: str = "") -> None:
+        """The current case as a star; ``elsewhere`` (not empty) says how the case's flight differs from
+        every map's (an airspeed, a held rotor speed): then no star, and the status line says so
+        (Table 1's 14 m/s case sat as a star on the axial map)."""
+        self.elsewhere = elsewhere
+        shown = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]} if not elsewhere else {"cg_pct": [], "gj_nm2": []}
+        self.marker_source.data = shown
+        self.redraw.kick()
 
     def csv(self) -> io.StringIO:
         job = self.job

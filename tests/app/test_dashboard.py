@@ -196,6 +196,34 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     assert "# complete: NO" in dash.map.csv().getvalue()
 
 
+def test_a_cell_loaded_after_a_preset_runs_from_its_own_trim(dash):
+    """After Fig. 10 a stable cell at GJ 1720 ran as "GJ 1500 → 1720 N m²/rad at 2 s" (the preset's
+    softening stayed on): not the case the map classified."""
+    from types import SimpleNamespace
+    dash.controls.preset = "fig10"
+    assert dash.controls.soften_at_s == 2.0
+    dash.load_cell(SimpleNamespace(cg=0.4625, gj_nm2=1715.3, verdict="stable"))
+    assert dash.controls.soften_at_s == 0.0 and dash.controls.gj_nm2 == 1720.0
+    assert dash.controls.scenario(None).changes == ()
+    assert "from its own trim ('Soften at 2 s' set to 0)" in dash.messages[-1][1]
+    dash.load_cell(SimpleNamespace(cg=0.40, gj_nm2=800.0, verdict="stable"))  # nothing to say without one
+    assert "Soften at" not in dash.messages[-1][1]
+
+
+def test_a_case_flown_at_an_airspeed_is_not_starred_on_a_map_of_another_flight(dash):
+    """Table 1 A flies at 14 m/s with the rotor speed held: its star sat on the axial map (μ 0)."""
+    dash.controls.preset = "table1a"
+    dash.refresh_analyses()
+    assert dash.map.marker_source.data["cg_pct"] == []
+    dash.map.poll()
+    status = dash.map.status.value
+    assert "Not this case's flight:</b> this case is not on the map: it flies at 14 m/s and its rotor speed is held at 38 rad/s, while the map is at μ 0" in status
+    dash.controls.preset = "fig10"  # a map's own flight: the star and no note
+    dash.refresh_analyses()
+    dash.map.poll()
+    assert dash.map.marker_source.data["cg_pct"] == [40.0] and "Not this case's flight" not in dash.map.status.value
+
+
 def test_bad_input_becomes_a_message_and_the_session_keeps_working(dash, wait):
     assert not dash.upload(b"this is [not toml", "broken.toml")
     assert dash.alert.visible and "broken.toml" in dash.alert.object and "not valid TOML" in dash.alert.object
