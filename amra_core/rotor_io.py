@@ -11,6 +11,7 @@ from __future__ import annotations
 import errno
 import math
 import os
+import re
 import stat
 import tomllib
 from pathlib import Path
@@ -234,23 +235,38 @@ def rotor_from_dict(data: dict) -> Rotor:
     if not isinstance(r, list):
         raise RotorError(f"blade.r_m = {r!r} is not allowed: must be a list of radii [m], root to tip")
     n = len(r)
-    fields = {}
+    fields, blade_given = {}, {}
     for name in STATION_FIELDS:
         if name not in blade:
             raise RotorError(f"blade.{name} = (missing) is not allowed: the field is required")
-        v = blade.pop(name)
+        v = blade_given[name] = blade.pop(name)
         fields[name] = tuple(v) if isinstance(v, list) else (v,) * n
     if blade:
         k = sorted(blade)[0]
         raise RotorError(f"blade.{k} = {blade[k]!r} is not allowed: unknown field")
-    stations = BladeStations(**fields)
-    pm = None
-    if point is not None:
-        try:
-            pm = PointMass(**point)
-        except TypeError as exc:
-            raise RotorError(f"point_mass = {point!r} is not allowed: needs r_m, mass_kg and optional x_chord ({exc})") from None
-    return Rotor(stations=stations, point_mass=pm, sources=tuple(sorted(sources.items())), **top)
+    scalars = [name for name in STATION_FIELDS if not isinstance(blade_given[name], list)]
+    try:
+        stations = BladeStations(**fields)
+        pm = None
+        if point is not None:
+            try:
+                pm = PointMass(**point)
+            except TypeError as exc:
+                raise RotorError(f"point_mass = {point!r} is not allowed: needs r_m, mass_kg and optional x_chord "
+                                 f"({exc})") from None
+        return Rotor(stations=stations, point_mass=pm, sources=tuple(sorted(sources.items())), **top)
+    except RotorError as exc:
+        raise RotorError(_as_in_the_file(str(exc), scalars)) from None
+
+
+def _as_in_the_file(message: str, scalars: list) -> str:
+    """A message about the blade's stations named as the file writes them: its ``[blade]`` table, and a
+    value given once for the whole span without a station index ("stations.chord_m[0] = -0.197" read
+    as a list the file does not have)."""
+    message = message.replace("stations.", "blade.")
+    for name in scalars:
+        message = re.sub(rf"blade\.{name}\[\d+\]", f"blade.{name}", message)
+    return message
 
 
 def _short(v) -> str:

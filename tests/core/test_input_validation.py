@@ -126,7 +126,10 @@ WRONG_ACCEPTS = [
     ("name-table", ('name = "mccutcheon"', "name = {a = 1}"), "name = {'a': 1}"),
     ("airfoil-number", ('airfoil = "naca0012_critzos"', "airfoil = 5"), "airfoil = 5"),
     ("airfoil-unknown", ('airfoil = "naca0012_critzos"', 'airfoil = "naca9999"'), "naca0012_critzos, naca0012_sheldahl360k"),
-    ("chord-over-radius", ("chord_m = 0.197", "chord_m = 4.0\ntorsional_inertia_kg_m = 100.0"), "chord_m[0] = 4.0"),
+    ("chord-over-radius", ("chord_m = 0.197", "chord_m = 4.0\ntorsional_inertia_kg_m = 100.0"), "blade.chord_m = 4.0 is not"),
+    # as the file writes it: its [blade] table, and a value given once for the span has no station index
+    ("chord-negative", ("chord_m = 0.197", "chord_m = -0.197"), "blade.chord_m = -0.197 is not allowed: must lie in (0.0, 12.5]"),
+    ("mass-negative", ("mass_kg_m = [4.25,", "mass_kg_m = [-4.25,"), "blade.mass_kg_m[0] = -4.25 is not allowed"),
     ("twist-twice", ("twist_deg = 0.0", "twist_deg = 0.0\ntwist_rad = 0.1"), "both given"),
     ("n-blades-float", ("n_blades = 2", "n_blades = 2.0"), "n_blades = 2.0"),
     ("n-blades-bool", ("n_blades = 2", "n_blades = true"), "n_blades = True"),

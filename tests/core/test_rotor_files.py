@@ -200,7 +200,7 @@ BAD_FILES = [
     ("unclosed-array", (r"^x_ac = 0\.25", "x_ac = [0.25, 0.25"), ["not valid TOML"]),
     ("tip-not-at-radius", (r"^radius_m = 3\.81", "radius_m = 4.0"), ["r_m[9]", "3.81", "tip radius"]),
     # absurd magnitudes are named, never an OverflowError in the section checks (1e308 squared)
-    ("absurd-chord", (r"^chord_m = 0\.197", "chord_m = 1e308"), ["chord_m[0]", "1e+308", "(0.0, 12.5]"]),
+    ("absurd-chord", (r"^chord_m = 0\.197", "chord_m = 1e308"), ["blade.chord_m = 1e+308", "(0.0, 12.5]"]),
     ("absurd-mass", (r"^mass_kg_m = \[4\.25,", "mass_kg_m = [1e300,"), ["mass_kg_m[0]", "1e+300", "(0.0, 10000.0]"]),
     ("absurd-gj", (r"^gj_nm2 = \[1534\.0,", "gj_nm2 = [1e200,"), ["gj_nm2[0]", "1e+200", "(0.0, 10000000000.0]"]),
     ("absurd-hub-inertia", (r"^hub_teeter_inertia_kg_m2 = [0-9.]+", "hub_teeter_inertia_kg_m2 = 1e300"),
