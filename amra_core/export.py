@@ -16,6 +16,7 @@ from typing import Iterable, Mapping
 import numpy as np
 
 from . import __version__
+from .layout import P_VH
 
 #: significant digits of exported numbers
 EXPORT_DIGITS = 8
@@ -101,6 +102,9 @@ def run_meta(sim, verdict=None) -> dict:
     the case) and its ``verdict`` (an :class:`amra_core.verdict.Verdict`: class, outcome, the run's
     fitted growth rate, frequency, collapse time, rotor-speed headline)."""
     meta = case_meta(sim.case, [what for _, _, what in sim.changes])
+    if sim.case.flight.mu:  # the airspeed the trim set (the case alone can only say how it is set)
+        meta["airspeed_m_s"] = float(sim.model.arrays.p[P_VH])
+        meta["airspeed_from"] = "mu at the trim's rotor speed"
     meta["start"] = sim.start_note
     if verdict is not None:
         meta |= {"verdict": verdict.verdict, "outcome": verdict.outcome,

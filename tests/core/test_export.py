@@ -5,6 +5,7 @@ from __future__ import annotations
 import io
 
 import numpy as np
+import pytest
 
 from amra_core import __version__
 from amra_core.export import file_name, table_csv
@@ -40,3 +41,21 @@ def test_a_case_flown_at_an_advance_ratio_does_not_claim_0_m_s():
     assert at_mu["mu"] == 0.1 and at_mu["airspeed_m_s"] == "set by mu at the trim's rotor speed"
     at_speed = case_meta(Case(rotor, FlightCondition(airspeed_m_s=14.0), SolverSettings("rigid")))
     assert at_speed["mu"] == 0.0 and at_speed["airspeed_m_s"] == 14.0
+
+
+def test_a_run_at_an_advance_ratio_writes_the_airspeed_its_trim_set():
+    """A forward-flight history's header said only "set by mu at the trim's rotor speed": no number."""
+    import math
+    from amra_core.export import run_meta
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.layout import P_ALPHA_S
+    from amra_core.model import Y_OMEGA
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case, Simulation
+    rotor = load_preset("mccutcheon")
+    sim = Simulation(Case(rotor, FlightCondition(mu=0.1), SolverSettings("rigid"), t_end_s=0.1))
+    meta = run_meta(sim)
+    # mu is the advance ratio in the disc plane: V cos(alpha_s) = mu Omega R at the trim
+    v_disc = meta["airspeed_m_s"] * math.cos(sim.model.arrays.p[P_ALPHA_S])
+    assert v_disc == pytest.approx(0.1 * sim.y[Y_OMEGA] * rotor.radius_m, rel=1e-9)
+    assert meta["airspeed_from"] == "mu at the trim's rotor speed"
