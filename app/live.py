@@ -24,7 +24,9 @@ from amra_core.simulation import COL
 MAX_POINTS = 2000  #: points per curve in the page, at most
 NORMAL_HEIGHT = 220  #: height of a live plot [px]
 PRESENT_HEIGHT = 290  #: in presentation mode: two rows and the header fill a 1280x720 screen [px]
-UNITS = {"t_s": ("Time", "s"), "omega_rad_s": ("Rotor speed Ω", "rad/s"), "teeter_deg": ("Teeter β", "deg"),
+#: axis names and units; a plot's title names the quantity, so its y label stays short enough for the
+#: 220 px plot ("Rotor speed Ω [rad/s]" was cut to "otor speed Ω [rad/s]" at some ranges)
+UNITS = {"t_s": ("Time", "s"), "omega_rad_s": ("Ω", "rad/s"), "teeter_deg": ("Teeter β", "deg"),
          "twist0_deg": ("Tip twist", "deg"), "twist1_deg": ("Tip twist", "deg"),
          "descent_m_s": ("Descent rate", "m/s"), "gj_nm2": ("GJ", "N m²/rad")}
 COLUMNS = tuple(UNITS)

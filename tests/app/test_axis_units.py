@@ -24,3 +24,15 @@ def test_the_views_axes_write_units_in_brackets(dash):
     assert len(labels) >= 12, labels
     assert not [lb for lb in labels if PAREN_UNIT.search(lb)], labels
     assert {"Time [s]", "Frequency [Hz]", "Rotor speed Ω [rad/s]"} <= set(labels), labels
+
+
+def test_the_live_plots_y_labels_fit_their_height(dash):
+    """At 13 px a label of more than 18 characters is taller than a 220 px live plot's frame: "Rotor
+    speed Ω [rad/s]" (21) showed as "otor speed Ω [rad/s]" ("Descent rate [m/s]", 18, fits)."""
+    from app.live import NORMAL_HEIGHT
+    labels = []
+    for fig in dash.live.figures():
+        assert fig.height == NORMAL_HEIGHT == 220
+        labels += [ax.axis_label for ax in fig.left if ax.axis_label]
+    assert len(labels) == 4 and "Ω [rad/s]" in labels, labels
+    assert max(len(lb) for lb in labels) <= 18, labels
