@@ -142,6 +142,7 @@ class MapView(pn.viewable.Viewer):
                                                bar_color="info")
         self.status = text("Map: waiting ...", "amra-map-status")
         self.elsewhere = ""  #: how the current case's flight differs from the map's (see mark)
+        self._legend_items: list = []  #: (LegendItem, its source, its cell class or "") of every figure
         self._lines_key = None
         self.eta = Eta()
         self.ea_source = ColumnDataSource({"x": [32.0]})
@@ -195,6 +196,7 @@ class MapView(pn.viewable.Viewer):
             line += f"<br><b>Result store:</b> {html.escape(snap['notice'])}"
         self.status.value = line
         self.draw_boundaries(self.registry.related(spec))
+        self.show_legend()
 
     def draw_boundaries(self, related: dict) -> None:
         """Per fidelity computed so far (``{fidelity: MapJob}``): the fold line (no autorotation below)
@@ -233,6 +235,7 @@ class MapView(pn.viewable.Viewer):
                          f"{name} GJ over every estimate ±{100 * result['step']:.0f} %: {lo:.0f} to "
                          + ("the top of the range" if open_top else f"{hi:.0f}") + " N m²/rad"))
         self.sens_source.data = {k: [r[i] for r in rows] for i, k in enumerate(("cg_pct", "lo", "hi", "text"))}
+        self.show_legend()
 
     def mark(self, cg_pct: float, gj: float, elsewhere: str = "") -> None:
         """The current case as a star; ``elsewhere`` (not empty) says how the case's flight differs from
@@ -241,6 +244,7 @@ class MapView(pn.viewable.Viewer):
         self.elsewhere = elsewhere
         shown = {"cg_pct": [float(cg_pct)], "gj_nm2": [float(gj)]} if not elsewhere else {"cg_pct": [], "gj_nm2": []}
         self.marker_source.data = shown
+        self.show_legend()
         self.redraw.kick()
 
     def csv(self) -> io.StringIO:
@@ -266,7 +270,7 @@ class MapView(pn.viewable.Viewer):
                                                          fill_color=colour, line_color=colour),
                               view=CDSView(filter=GroupFilter(column_name="class", group=cls)))
             cells.append(r)
-            class_items.append(LegendItem(label=cls, renderers=[r]))
+            class_items.append(self._legend(LegendItem(label=cls, renderers=[r]), self.cells_source, cls))
         fig.add_tools(HoverTool(renderers=cells, tooltips=[
             ("CG", "@cg_pct{0.0} % chord"), ("GJ", "@gj_nm2{0.0} N m²/rad"), ("class", "@class"),
             ("verdict", "@verdict"), ("growth rate (eigenvalue)", "@growth_text")]))
@@ -276,8 +280,8 @@ class MapView(pn.viewable.Viewer):
         weak = fig.add_glyph(self.band_sources["weak"], Quad(**band, fill_color="#ef9a9a", fill_alpha=0.15,
                                                              line_color="#ef9a9a", line_dash="dotted", hatch_pattern="/",
                                                              hatch_color="#e57373", hatch_alpha=0.5))
-        items = [LegendItem(label="strong flutter (this map)", renderers=[strong]),
-                 LegendItem(label="weak window (does not set GJ)", renderers=[weak])]
+        items = [self._legend(LegendItem(label="strong flutter (this map)", renderers=[strong]), self.band_sources["strong"]),
+                 self._legend(LegendItem(label="weak window (does not set GJ)", renderers=[weak]), self.band_sources["weak"])]
         fig.add_tools(HoverTool(renderers=[strong, weak], tooltips=[("", "@text")]))
         xy = {"x": "cg_pct", "y": "gj_nm2"}
         for fid, colour in FIDELITY_COLOURS.items():
@@ -287,18 +291,21 @@ class MapView(pn.viewable.Viewer):
             flutter = fig.add_glyph(self.flutter_sources[fid], Line(**xy, line_color=colour, line_width=2.5,
                                                                     line_dash="dashed"))
             fig.add_glyph(self.flutter_sources[fid], Scatter(**xy, marker="triangle", size=8, **dots))
-            items += [LegendItem(label=f"{fid}: fold (no autorotation below)", renderers=[fold]),
-                      LegendItem(label=f"{fid}: strong flutter", renderers=[flutter])]
+            items += [self._legend(LegendItem(label=f"{fid}: fold (no autorotation below)", renderers=[fold]),
+                                   self.fold_sources[fid]),
+                      self._legend(LegendItem(label=f"{fid}: strong flutter", renderers=[flutter]),
+                                   self.flutter_sources[fid])]
         sens = fig.add_glyph(self.sens_source, Segment(x0="cg_pct", y0="lo", x1="cg_pct", y1="hi", line_color="#000000",
                                                        line_width=7, line_alpha=0.3))
         for end in ("lo", "hi"):
             fig.add_glyph(self.sens_source, Scatter(x="cg_pct", y=end, marker="dash", size=16, line_width=2,
                                                     line_color="#000000", fill_color="#000000"))
         fig.add_tools(HoverTool(renderers=[sens], tooltips=[("", "@text")]))
-        items.append(LegendItem(label="sensitivity band (estimates ±10 %)", renderers=[sens]))
+        items.append(self._legend(LegendItem(label="sensitivity band (estimates ±10 %)", renderers=[sens]),
+                                  self.sens_source))
         star = fig.add_glyph(self.marker_source, Scatter(**xy, marker="star", size=20, fill_color="gold",
                                                          line_color="black"))
-        items.append(LegendItem(label="current case", renderers=[star]))
+        items.append(self._legend(LegendItem(label="current case", renderers=[star]), self.marker_source))
         ea = fig.add_glyph(self.ea_source, VSpan(x="x", line_color="black", line_width=1.5, line_dash="dotted"))
         items.append(LegendItem(label="elastic axis (EA)", renderers=[ea]))
         classes = Legend(items=class_items, location="top_left", title="cells")
@@ -307,6 +314,26 @@ class MapView(pn.viewable.Viewer):
         fig.toolbar.logo = None
         fig.on_event(Tap, self._tapped)
         return fig
+
+    def _legend(self, item: LegendItem, source: ColumnDataSource, cls: str = "") -> LegendItem:
+        """``item``, listed only while ``source`` has something to draw (of class ``cls`` when given):
+        empty entries (fem-coupled lines on a rigid map, "failed" with no failed cell) stood in the legend
+        without a swatch."""
+        self._legend_items.append((item, source, cls))
+        self._show_legend_item(item, source, cls)
+        return item
+
+    @staticmethod
+    def _show_legend_item(item: LegendItem, source: ColumnDataSource, cls: str) -> None:
+        column = source.data["class"] if cls else next(iter(source.data.values()), [])
+        shown = (cls in list(column)) if cls else len(column) > 0
+        if item.visible != shown:
+            item.visible = shown
+
+    def show_legend(self) -> None:
+        """Every legend entry listed exactly when its glyph draws something (event loop)."""
+        for item, source, cls in self._legend_items:
+            self._show_legend_item(item, source, cls)
 
     def _tapped(self, event) -> None:
         cell = nearest_cell(self.cells, event.x, event.y)

@@ -171,6 +171,13 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     pump_until(dash, lambda: dash.map.job.state == "done" and dash.map.cells, wait, 180, what="the map")
     dash.map.poll()
     assert dash.map.progress.value == 100 and "complete" in dash.map.status.value
+    # the legend lists what the map draws: no fem-coupled lines on a rigid map, no "failed" without a
+    # failed cell (such entries stood there without a swatch)
+    shown = [item.label["value"] for lg in fig.right for item in lg.items if item.visible]
+    assert "rigid: fold (no autorotation below)" in shown and "current case" in shown and "stable" in shown
+    assert not [lb for lb in shown if lb.startswith(("fem-torsion", "fem-coupled"))], shown
+    assert ("failed" in shown) == any(c.verdict == "failed" for c in dash.map.cells)
+    assert "sensitivity band (estimates ±10 %)" not in shown
     cell = dash.map.cells[3]
     dash.load_cell(cell)  # values rounded to the grid's resolution
     assert dash.controls.cg_pct == pytest.approx(100 * cell.cg) and dash.controls.gj_nm2 == float(f"{cell.gj_nm2:.3g}")
