@@ -88,7 +88,12 @@ class ModesView(pn.viewable.Viewer):
         self.frame = modes_frame(modes)
         self.table.object = self.frame
         self.info.object = units_as_shown(result.get("text", ""))
-        options = {"(choose a mode)": None}
+        # no trim, no modes: the select said "(choose a mode)" over nothing (Fig. 10 at GJ 100)
+        options = {"(choose a mode)" if modes else "(no modes: this case has no trim)": None}
+        if not modes:
+            self.animation.info.object = "No modes to watch: this case has no trimmed autorotation."
+        elif self.animation.info.object.startswith("No modes"):
+            self.animation.info.object = "Pick a mode to watch its shape."
         for m in modes:
             if m.label != "aero lag":
                 options[f"{m.label}, {m.frequency_hz:.3g} Hz, σ {m.real_part_per_s:+.3g} 1/s"] = (
@@ -124,7 +129,9 @@ class ModesView(pn.viewable.Viewer):
         if len(data):
             g = data["gj_nm2"].unique()
             near = data[data["gj_nm2"] == g[np.argmin(np.abs(np.log(g) - math.log(gj)))]]
-        cur = hv.Points(near, [RE_DIM, F_DIM], ["label"], label="nearest sampled GJ").opts(
+        # its GJ in the hover and the legend's words: at Fig. 10's GJ 100 (no trim) it circled the modes of
+        # GJ 424, which read as the current case's
+        cur = hv.Points(near, [RE_DIM, F_DIM], ["label", GJ_DIM], label="nearest sampled GJ with a trim").opts(
             marker="circle", size=13, fill_alpha=0, line_color="red", line_width=2)
         return (pts * cur * hv.VLine(0.0).opts(color="black", line_dash="dashed")).opts(
             title="Root locus over GJ, current CG (colour: GJ, purple 50 to yellow 3000 N m²/rad)", responsive=True,

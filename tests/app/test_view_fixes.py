@@ -217,3 +217,30 @@ def test_the_locus_plots_follow_a_locus_that_arrives_after_they_are_drawn():
     assert y.start <= -0.9 and y.end >= 2.4
     pts = plots[0].subplots[list(plots[0].subplots)[0]].handles["source"].data
     assert all(isinstance(c, str) and c.startswith("#") for c in pts["colour"])  # colours, not a mapped column
+
+
+def test_a_case_without_a_trim_says_it_has_no_modes_to_watch():
+    """Fig. 10 at GJ 100 has no trim: the select offered "(choose a mode)" over nothing."""
+    from amra_core.stability import Mode
+    from app.views.modes import ModesView
+    view = ModesView(SimpleNamespace(subscribe=lambda *a, **k: None))
+    view.show_modes({"modes": [], "text": "**No trim** for this case, so no modes"})
+    assert list(view.pick.options) == ["(no modes: this case has no trim)"]
+    assert view.animation.info.object == "No modes to watch: this case has no trimmed autorotation."
+    view.show_modes({"modes": [Mode("torsion", 27.9, 0.083, -14.5)], "text": "Modes of the trim"})
+    assert list(view.pick.options) == ["(choose a mode)", "torsion, 27.9 Hz, σ -14.5 1/s"]
+    assert view.animation.info.object == "Pick a mode to watch its shape."
+
+
+def test_the_locus_circle_names_the_sampled_gj_it_shows():
+    """At a GJ without a trim the circle sat on the modes of the nearest trimmed GJ, read as the case's."""
+    from app.compute import LocusPoint
+    from amra_core.stability import Mode
+    from app.views.modes import ModesView
+    hv.extension("bokeh")
+    view = ModesView(SimpleNamespace(subscribe=lambda *a, **k: None))
+    pts = [LocusPoint(424.0, True, (Mode("torsion", 27.9, 0.083, -14.5),), -14.5, True),
+           LocusPoint(100.0, False, (), None, False)]
+    overlay = view._locus(pts, 100.0)
+    circle = [el for el in overlay if el.label == "nearest sampled GJ with a trim"]
+    assert len(circle) == 1 and list(circle[0].dimension_values("gj_nm2")) == [424.0]
