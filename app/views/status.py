@@ -128,6 +128,7 @@ class StatusView(pn.viewable.Viewer):
         self.notify = notify
         self.case = ""  #: the case of the run the card speaks of (set when a run starts)
         self.case_at_start = ""  #: ... as it started (before any live change)
+        self.live_changes: list = []  #: the run's live changes so far, in words with their times
         self.gj_nm2: Optional[float] = None  #: the run's GJ [N m²/rad] (set at its start, moved by its changes)
         session.subscribe(RunStatus, lambda ev: setattr(self.run, "value", run_html(ev.text)))
         session.subscribe(Started, self._started)
@@ -136,6 +137,7 @@ class StatusView(pn.viewable.Viewer):
 
     def _started(self, ev: Started) -> None:
         self.case_at_start = self.case
+        self.live_changes = []
         self.show(None, False)
         if ev.start_note.startswith("no steady"):
             self.notify(f"no trim exists for this case: {ev.start_note}", "warning")
@@ -144,8 +146,11 @@ class StatusView(pn.viewable.Viewer):
         how = "softened as scripted" if ev.values.get("scripted") else "applied live"
         self.gj_nm2 = ev.values.get("gj_nm2", self.gj_nm2)
         self.note.value = f"{how} at t = {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
-        if not ev.values.get("scripted"):  # the card's case: the run's start, then the last live change
-            self.case = f"{self.case_at_start} · live at {ev.t_s:.2f} s: {ev.text(', ', unit=True)}"
+        if not ev.values.get("scripted"):  # the card's case: the run's start, then every live change
+            # (only the last was named: after GJ 300, CG 43 % and EA 30 % the card read "GJ 1500 ... live
+            # at 15.15 s: EA 30 %" over a collapse that GJ 300 had started at 6.85 s)
+            self.live_changes.append(f"{ev.text(', ', unit=True)} at {ev.t_s:.2f} s")
+            self.case = f"{self.case_at_start} · live: {'; '.join(self.live_changes)}"
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
         self.verdict = verdict

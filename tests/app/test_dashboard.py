@@ -75,7 +75,7 @@ def test_a_live_gj_change_is_told_as_what_moved(dash, wait):
     assert dash.status.note.value == "applied live at the next chunk: GJ 100 N m²/rad"
     pump_until(dash, lambda: dash.last_history is not None, wait, what="the run's end")
     card = dash.status.card.value.replace("\u00a0", " ")
-    assert "GJ 1500 N m²/rad" in card and "· live at " in card and ": GJ 100 N m²/rad" in card
+    assert "GJ 1500 N m²/rad" in card and "· live: GJ 100 N m²/rad at " in card
     assert "since the change to GJ 100 N m²/rad at t = " in card
     assert "EA 32.0 % chord" not in card and "CG 40.0 % chord" not in card
     assert "decayed from the start" not in dash.status.verdict.explanation

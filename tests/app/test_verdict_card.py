@@ -87,3 +87,22 @@ def test_the_card_and_the_map_name_their_growth_rates_apart():
     from app.controls import Controls
     from app.views.help import help_pane
     assert "Two growth rates" in help_pane(Controls()).object
+
+
+def test_the_cards_case_names_every_live_change_of_the_run():
+    """After GJ 300, CG 43 % and EA 30 % the card named only the last ("live at 15.15 s: EA 30 %") over a
+    collapse that GJ 300 had started at 6.85 s."""
+    from types import SimpleNamespace
+    from app.events import Applied, Started
+    from app.views.status import StatusView
+    handlers = {}
+    view = StatusView(SimpleNamespace(subscribe=lambda kind, fn: handlers.setdefault(kind, fn)), lambda *a: None)
+    view.case = "paper-boundary · rigid · GJ 1500 N m²/rad"
+    handlers[Started](SimpleNamespace(start_note="started from the trim"))
+    handlers[Applied](Applied(1, {"gj_nm2": 300.0}, 6.85))
+    handlers[Applied](Applied(1, {"x_cg": 0.43}, 11.2))
+    handlers[Applied](Applied(1, {"x_ea": 0.30}, 15.15))
+    assert view.case == ("paper-boundary · rigid · GJ 1500 N m²/rad · live: GJ 300 N m²/rad at 6.85 s; "
+                         "CG 43 % at 11.20 s; EA 30 % at 15.15 s")
+    handlers[Started](SimpleNamespace(start_note="started from the trim"))  # a new run starts without them
+    assert view.live_changes == []
