@@ -22,6 +22,7 @@ from tsdownsample import MinMaxDownsampler, NaNMinMaxDownsampler
 from amra_core.simulation import COL
 
 MAX_POINTS = 2000  #: points per curve in the page, at most
+MARK_LABEL_GAP_S = 1.0  #: live changes closer than this [s] of run time share one label (the last's)
 NORMAL_HEIGHT = 220  #: height of a live plot [px]
 PRESENT_HEIGHT = 290  #: in presentation mode: two rows and the header fill a 1280x720 screen [px]
 #: axis names and units; a plot's title names the quantity, so its y label stays short enough for the
@@ -125,7 +126,13 @@ class LivePlots:
         return n
 
     def mark(self, t_s: float, text: str) -> None:
-        """A vertical line at ``t_s`` [s] in every plot, labelled ``text`` (a change's new value)."""
+        """A vertical line at ``t_s`` [s] in every plot, labelled ``text`` (a change's new value). Of
+        changes less than :data:`MARK_LABEL_GAP_S` apart only the last keeps its label: ten arrow-key
+        presses on a slider mid-run wrote ten labels over each other ("CGCG4343%%..."); the card's case
+        line names every change."""
+        times = list(self.markers.data["t_s"])
+        if times and float(t_s) - times[-1] < MARK_LABEL_GAP_S:
+            self.markers.patch({"text": [(len(times) - 1, "")]})
         self.markers.stream({"t_s": [float(t_s)], "text": [text]})
 
     def _fill(self, cols: dict, points: int) -> None:

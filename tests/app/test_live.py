@@ -73,3 +73,15 @@ def test_the_blades_legend_sits_above_the_plot_not_on_the_data():
     legends = [m for m in twist.above if isinstance(m, Legend)]
     assert len(legends) == 1 and [i.label["value"] for i in legends[0].items] == ["blade 0", "blade 1"]
     assert not any(isinstance(m, Legend) for f in figs for m in f.center)
+
+
+def test_a_burst_of_live_changes_keeps_one_readable_label():
+    """Ten arrow-key presses on the CG and EA sliders mid-run drew ten labels over each other
+    ("CGCG4343%%..."): every change keeps its line, only the last of a burst its label."""
+    live = LivePlots()
+    live.mark(6.85, "GJ 300")
+    for i, t in enumerate((11.2, 11.4, 11.6, 11.8)):
+        live.mark(t, f"CG {41 + i} %")
+    live.mark(15.15, "EA 30 %")
+    assert list(live.markers.data["t_s"]) == [6.85, 11.2, 11.4, 11.6, 11.8, 15.15]
+    assert list(live.markers.data["text"]) == ["GJ 300", "", "", "", "CG 44 %", "EA 30 %"]
