@@ -52,10 +52,18 @@ def display_frame(result: dict) -> pd.DataFrame:
 def summary_html(result: dict) -> str:
     b = result["baseline"]
     flutter = math.inf if b["flutter_at_gj_max"] else b["flutter_gj_nm2"]
+    step = f"±{100 * result['step']:.0f} %"
+
+    def boundary(name, base, band):  # "none in range, band 591 to 680" read as a contradiction
+        if band is None:
+            return f"{name} GJ {_gj(base)}"
+        if base is None:
+            return f"{name} GJ none in range at the baseline, {_band(band)} under some of the {step} changes"
+        return f"{name} GJ {_gj(base)}, {_band(band)} over the baseline and every {step} change"
     return (f"<b>Sensitivity</b> at CG {100 * result['cg']:.1f} % chord ({html.escape(result['fidelity'])}, "
-            f"μ {result['mu']:g}, every estimate ±{100 * result['step']:.0f} %, {result['wall_time_s']:.0f} s): "
-            f"fold GJ {_gj(b['fold_gj_nm2'])}, band {_band(result['fold_band_nm2'])}; "
-            f"strong-flutter GJ {_gj(flutter)}, band {_band(result['flutter_band_nm2'])}. "
+            f"μ {result['mu']:g}, every estimate {step}, {result['wall_time_s']:.0f} s): "
+            f"{boundary('fold', b['fold_gj_nm2'], result['fold_band_nm2'])}; "
+            f"{boundary('strong-flutter', flutter, result['flutter_band_nm2'])}. "
             "The bands are drawn on the map at this CG.")
 
 

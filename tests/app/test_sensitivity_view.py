@@ -60,3 +60,15 @@ def test_a_change_that_rounds_to_zero_reads_plus_zero():
            "d_fold_gj_nm2": -0.3, "flutter_gj_nm2": None, "d_flutter_gj_nm2": None, "note": ""}
     table = display_frame({"rows": [row]})
     assert "-0" not in table.to_string().replace("-10", "") and "+0" in table.to_string()
+
+
+def test_the_summary_says_a_band_without_a_baseline_boundary_comes_from_the_changes():
+    """"strong-flutter GJ none in range, band 591 to 680 N m²/rad" read as a contradiction."""
+    from app.views.sensitivity import summary_html
+    result = {"cg": 0.4, "fidelity": "rigid", "mu": 0.0, "step": 0.1, "wall_time_s": 4.2,
+              "baseline": {"fold_gj_nm2": 416.0, "flutter_gj_nm2": None, "flutter_at_gj_max": False},
+              "fold_band_nm2": (398.0, 431.0), "flutter_band_nm2": (591.0, 680.0)}
+    text = summary_html(result)
+    assert "fold GJ 416, 398 to 431 N m²/rad over the baseline and every ±10 % change" in text
+    assert ("strong-flutter GJ none in range at the baseline, 591 to 680 N m²/rad under some of the ±10 % "
+            "changes") in text
