@@ -40,9 +40,7 @@ def _frequency(verdict) -> str:
     """The run's dominant frequency; once the run has a growth rate, a missing one means that no
     oscillation was resolved (fewer than two cycles of it in the record: a drift, not a mode)."""
     if verdict.frequency_hz is None and verdict.growth_rate_per_s is not None:
-        return ("none resolved: by the end of the run the departure from its trim is a slow drift (any faster "
-                "oscillation had decayed; in forward flight the trim's own once-per-revolution motion is "
-                "not a departure)")
+        return "none resolved: at the end of the run only a slow drift departs from the trim (1/rev is the trim's own)"
     return _fmt(verdict.frequency_hz, "Hz")
 
 
