@@ -33,7 +33,8 @@ import numpy as np
 
 from . import kernels
 from .layout import (N_LOADS, N_P, N_S_COLS, N_SV_ROWS, N_Y_FIXED, P_LAWSON, P_LAWSON_LAGS, P_INFLOW3, P_NS, P_NST,
-                     P_UNIT_MASS, STATION_STRIDE, ModelArrays, station_shapes, station_vectors)
+                     P_UNIT_MASS, STATION_STRIDE, N_XQ, N_XQD, ModelArrays, coordinate_products, station_shapes,
+                     station_vectors)
 
 
 class KernelShapeError(ValueError):
@@ -115,6 +116,13 @@ def check_model_arrays(m: ModelArrays) -> tuple:
             raise KernelShapeError("ModelArrays.sv is not the station table st laid out per blade")
         if not np.array_equal(m.kin, station_shapes(m.shw, m.shd, m.sht)):
             raise KernelShapeError("ModelArrays.kin is not shw, shd, sht laid out per coordinate")
+        # and the side-by-side copies of the structural matrices the same numbers as the matrices
+        _shape("ModelArrays.xq", m.xq, (ns, N_XQ * ns))
+        _shape("ModelArrays.xqd", m.xqd, (ns, N_XQD * ns))
+        xq, xqd = coordinate_products(m)
+        if not (np.array_equal(m.xq, xq) and np.array_equal(m.xqd, xqd)):
+            raise KernelShapeError("ModelArrays.xq, xqd are not k0, k2, c, gyh, ls2, li2, glh, ugyh, uglh "
+                                   "side by side (arrays mixed from two models, or one side edited)")
         # the kernel then skips minv, ugyh and uglh: they must be what it assumes
         if unit_mass and not (np.array_equal(m.minv, np.eye(ns)) and np.array_equal(m.ugyh, m.gyh)
                               and np.array_equal(m.uglh, m.glh)):

@@ -24,12 +24,13 @@ from .layout import (L_FHORIZ, L_FVERT, L_HFORCE, L_THRUST, L_TORQUE, L_VM, N_LO
                     P_LAWSON, P_LAWSON_LAGS, P_UNIT_MASS,
                     P_INFLOW3, P_IR, P_NQ, P_NS, P_NST, P_QUASI_STATIC, P_R, P_R0, P_RHO, P_SLAG, P_VACUUM,
                     P_VH, S_A, S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, STATION_STRIDE, SV_A, SV_C, SV_R, SV_SIGN,
-                    SV_THETA0, SV_W, SV_XAC, SV_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0,
+                    SV_THETA0, SV_W, SV_XAC, SV_XEA, N_XQ, N_XQ_UNIT, N_XQD, XQ_GLH0, XQ_GYH, XQ_K0, XQ_K2,
+                    XQ_LI0, XQ_LI1, XQ_LS0, XQ_LS1, XQ_UGLH0, XQ_UGYH, XQD_C, XQD_GLH0, XQD_GYH, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0,
                     Y_ZETAD0)
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "af29e4257887c9db"
+CACHE_STAMP = "5632898297839201"
 
 A1, A2 = WAGNER_A
 B1, B2 = WAGNER_B
@@ -203,16 +204,21 @@ W_CL, W_CD, W_CM, W_FZ, W_FFWD, W_MY = range(12 * STATION_STRIDE, 18 * STATION_S
 W_LAG1, W_LAG2 = range(18 * STATION_STRIDE, 20 * STATION_STRIDE, STATION_STRIDE)
 N_STATION_ROWS = 20
 #: and the per-coordinate scratch ``cw`` (N_COORDINATE_ROWS, n_s): generalised aerodynamic force,
-#: force vector and ``ul_b``. The structural loops stay row by row (13 sums sharing each load of x):
-#: products by columns, vectorised, measured slower for the 5 to 23 coordinates of the fidelities.
+#: force vector and ``ul_b``.
 C_Q, C_F, C_UL0, C_UL1 = range(4)
 N_COORDINATE_ROWS = 4
+
+
+#: and after the station rows, the products of the structural matrices with x and x' (``ModelArrays.xq``,
+#: ``xqd``): ``work[W_PQ + j n + i] = (A_j x)_i``, then ``N_XQD`` rows for ``x'``
+W_PQ = N_STATION_ROWS * STATION_STRIDE
 
 
 @kernel
 def new_work(m):
     """The two scratch arrays of :func:`rhs` for the model ``m``: (work, cw)."""
-    return np.empty(N_STATION_ROWS * STATION_STRIDE), np.empty((N_COORDINATE_ROWS, int(m.p[P_NS])))
+    ns = int(m.p[P_NS])
+    return np.empty(W_PQ + (N_XQ + N_XQD) * ns), np.empty((N_COORDINATE_ROWS, ns))
 
 
 @kernel
@@ -222,8 +228,9 @@ def rhs(y, dy, m, loads, work, cw):
 
     The blade stations of both blades are one vector (station ``s`` = blade * n_st + j, the
     layout of ``m.sv``, ``m.kin`` and ``work``), run through in passes the compiler vectorises:
-    deflections at the stations, section flow and the table position, the table lookups (indexed loads: one
-    station after the other), the section loads; then the sums over stations."""
+    deflections at the stations, section flow, the angle of attack, the table position, the table lookups
+    (indexed loads: one station after the other), the section loads; then the sums over stations. The
+    structural matrices' products with the coordinates are one pass too (``ModelArrays.xq``, ``xqd``)."""
     p = m.p
     nst = int(p[P_NST]); ns = int(p[P_NS])
     rho = p[P_RHO]; R = p[P_R]; r0 = p[P_R0]
@@ -255,17 +262,23 @@ def rhs(y, dy, m, loads, work, cw):
             work[W_THD + s] += kin[k, 2 * STATION_STRIDE + s] * qd
     for s in range(nsv):  # the Wagner states, interleaved in y, as rows (a strided copy)
         work[W_LAG1 + s] = y[a0 + 2 * s]; work[W_LAG2 + s] = y[a0 + 2 * s + 1]
-    # the section's flow, Wagner state rates, table position
+    # the section's flow and Wagner state rates
     for s in range(nsv):
         r = sv[SV_R, s]; sp = sv[SV_SIGN, s] * sp0; cp = sv[SV_SIGN, s] * cp0
         ut, up = section_velocities(om, r, r0, zd0 if s < nst else zd1, vx, vup, v0, hs, hc, sp, cp,
                                     work[W_WDOT + s], work[W_WP + s])
         v, wn, uc, d1, d2 = section_flow(ut, up, sv[SV_THETA0, s] + work[W_TH + s], work[W_THD + s],
                                          sv[SV_C, s], sv[SV_XEA, s], work[W_LAG1 + s], work[W_LAG2 + s], theo)
-        cell, frac, aw = table_position(atan2(wn, uc), af_alpha0, af_dalpha, n_af)
         work[W_UT + s] = ut; work[W_UP + s] = up; work[W_V + s] = v; work[W_WN + s] = wn; work[W_UC + s] = uc
-        work[W_CELL + s] = cell; work[W_FRAC + s] = frac; work[W_ALPHA + s] = aw
         work[W_LAG1 + s] = d1; work[W_LAG2 + s] = d2
+    # the angle and the table position in passes of their own: the three are each a long chain of
+    # dependent operations, and in one loop body too long for the processor to overlap one
+    # station's chain with the next (measured: the pass 31 % faster split in three, same numbers)
+    for s in range(nsv):
+        work[W_ALPHA + s] = atan2(work[W_WN + s], work[W_UC + s])
+    for s in range(nsv):
+        cell, frac, aw = table_position(work[W_ALPHA + s], af_alpha0, af_dalpha, n_af)
+        work[W_CELL + s] = cell; work[W_FRAC + s] = frac; work[W_ALPHA + s] = aw
     for s in range(nsv):
         dy[a0 + 2 * s] = work[W_LAG1 + s]; dy[a0 + 2 * s + 1] = work[W_LAG2 + s]
     for s in range(nsv):  # indexed loads: not vectorised
@@ -315,26 +328,33 @@ def rhs(y, dy, m, loads, work, cw):
     # a mass-normalised modal basis (every reduced FEM level) has M = I: then M^-1 H = H and the
     # products with M^-1 are the vectors themselves (model.py sets P_UNIT_MASS; the guard checks it)
     unit_mass = p[P_UNIT_MASS] > 0.5
+    # every product A_j x, A_j x' of the structural matrices at once (ModelArrays.xq, xqd): one pass
+    # over k whose inner loop runs along a row, vectorised; each sum still adds its terms in the order
+    # k = 0, 1, ..., so the numbers are those of row-by-row dot products (measured with
+    # scripts/bench_kernels.py against those: right-hand side 16 % faster fem-coupled, 14 % fem-torsion)
+    w_pqd = W_PQ + N_XQ * ns
+    npq = (N_XQ_UNIT if unit_mass else N_XQ) * ns
+    npqd = N_XQD * ns
+    xq = m.xq; xqd = m.xqd
+    for r in range(npq):
+        work[W_PQ + r] = 0.0
+    for r in range(npqd):
+        work[w_pqd + r] = 0.0
+    for k in range(ns):
+        q = y[x0 + k]; qd = y[xd0 + k]
+        for r in range(npq):
+            work[W_PQ + r] += xq[k, r] * q
+        for r in range(npqd):
+            work[w_pqd + r] += xqd[k, r] * qd
     for i in range(ns):
-        k0x = 0.0; k2x = 0.0; cxd = 0.0; hx = 0.0; hxd = 0.0; ux = 0.0
-        s0x = 0.0; s1x = 0.0; i0x = 0.0; i1x = 0.0
-        h0x = 0.0; h0xd = 0.0; v0x = 0.0
-        for k in range(ns):  # (the test of unit_mass is hoisted out of the loop by the compiler)
-            q = y[x0 + k]; qd = y[xd0 + k]
-            k0x += m.k0[i, k] * q
-            k2x += m.k2[i, k] * q
-            cxd += m.c[i, k] * qd
-            hx += m.gyh[i, k] * q
-            hxd += m.gyh[i, k] * qd
-            s0x += m.ls2[0, i, k] * q
-            s1x += m.ls2[1, i, k] * q
-            i0x += m.li2[0, i, k] * q
-            i1x += m.li2[1, i, k] * q
-            h0x += m.glh[0, i, k] * q
-            h0xd += m.glh[0, i, k] * qd
-            if not unit_mass:
-                ux += m.ugyh[i, k] * q
-                v0x += m.uglh[0, i, k] * q
+        k0x = work[W_PQ + XQ_K0 * ns + i]; k2x = work[W_PQ + XQ_K2 * ns + i]
+        hx = work[W_PQ + XQ_GYH * ns + i]
+        s0x = work[W_PQ + XQ_LS0 * ns + i]; s1x = work[W_PQ + XQ_LS1 * ns + i]
+        i0x = work[W_PQ + XQ_LI0 * ns + i]; i1x = work[W_PQ + XQ_LI1 * ns + i]
+        h0x = work[W_PQ + XQ_GLH0 * ns + i]
+        cxd = work[w_pqd + XQD_C * ns + i]; hxd = work[w_pqd + XQD_GYH * ns + i]
+        h0xd = work[w_pqd + XQD_GLH0 * ns + i]
+        ux = work[W_PQ + XQ_UGYH * ns + i]; v0x = work[W_PQ + XQ_UGLH0 * ns + i]
         if unit_mass:
             ux = hx; v0x = h0x
         # blade 1's parts from the totals (glh[0] + glh[1] = gyh, uglh[0] + uglh[1] = ugyh)

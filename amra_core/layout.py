@@ -89,6 +89,10 @@ class ModelArrays(NamedTuple):
     #: then blade 1's, then zeros), one ``SV_*`` row per quantity: the right-hand side runs its
     #: station loops over both blades' stations as one vector
     sv: np.ndarray
+    #: (n, N_XQ n) and (n, N_XQD n): the matrices above that the right-hand side multiplies by the
+    #: coordinates x and by their rates x', transposed and side by side (:func:`coordinate_products`)
+    xq: np.ndarray
+    xqd: np.ndarray
     #: (n, 3 STATION_STRIDE) ``shw``, ``shd``, ``sht`` per coordinate, one after the other, each
     #: station-contiguous as ``sv``: the same numbers, laid out for the vectorised loop
     kin: np.ndarray
@@ -116,3 +120,28 @@ def station_shapes(shw: np.ndarray, shd: np.ndarray, sht: np.ndarray) -> np.ndar
     for a, shape in enumerate((shw, shd, sht)):
         kin[:, a * STATION_STRIDE:a * STATION_STRIDE + nsv] = shape.reshape(nsv, ns).T
     return kin
+
+
+#: the matrices of ModelArrays.xq (times x) in their order, the two a unit mass skips last; and of xqd (times x')
+XQ_K0, XQ_K2, XQ_GYH, XQ_LS0, XQ_LS1, XQ_LI0, XQ_LI1, XQ_GLH0, XQ_UGYH, XQ_UGLH0 = range(10)
+N_XQ = 10
+N_XQ_UNIT = 8
+XQD_C, XQD_GYH, XQD_GLH0 = range(3)
+N_XQD = 3
+
+
+def coordinate_products(a: ModelArrays) -> tuple:
+    """(xq, xqd) of ModelArrays ``a``, from its matrices: ``xq[k, j n + i] = A_j[i, k]`` for the
+    matrices A_j of ``XQ_*`` in that order, ``xqd`` likewise for ``XQD_*``, so the right-hand side
+    forms the products ``A_j x`` of all of them in one loop over ``k`` whose inner loop runs along
+    a contiguous row."""
+    xq = np.concatenate([a.k0, a.k2, a.gyh, a.ls2[0], a.ls2[1], a.li2[0], a.li2[1], a.glh[0], a.ugyh,
+                         a.uglh[0]], axis=0).T
+    xqd = np.concatenate([a.c, a.gyh, a.glh[0]], axis=0).T
+    return np.ascontiguousarray(xq), np.ascontiguousarray(xqd)
+
+
+def with_coordinate_products(a: ModelArrays) -> ModelArrays:
+    """``a`` with its ``xq``, ``xqd`` formed from its own matrices (after any change to them)."""
+    xq, xqd = coordinate_products(a)
+    return a._replace(xq=xq, xqd=xqd)

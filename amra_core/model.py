@@ -32,7 +32,7 @@ from .layout import (  # noqa: F401
     P_LAWSON_LAGS,
     P_VH, S_A,
     S_C, S_R, S_THETA0, S_W, S_XAC, S_XEA, WAGNER_A, WAGNER_B, Y_OMEGA, Y_PSI, Y_V0, Y_VD, Y_ZETA0, Y_ZETA1,
-    Y_ZETAD0, Y_ZETAD1, station_shapes, station_vectors)
+    Y_ZETAD0, Y_ZETAD1, station_shapes, station_vectors, with_coordinate_products)
 
 
 @dataclass(frozen=True)
@@ -168,8 +168,9 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
     # and the Wagner states' decay too, in axial flight (the kernel checks the airspeed), where that
     # lengthens the step at 1.3 x the reference speed (below)
     p[P_LAWSON_LAGS] = float(settings.integrator == "lawson" and settings.aero == "theodorsen" and flight.is_axial)
+    c = phi.T @ structural_damping(s, zeta) @ phi
     arrays = ModelArrays(
-        p=p, minv=own(minv), k0=own(k0), k2=own(k2), c=phi.T @ structural_damping(s, zeta) @ phi,
+        p=p, minv=own(minv), k0=own(k0), k2=own(k2), c=c,
         st=own(parts.st), shw=own(shw), shd=own(shd), sht=own(sht), tip=own(tip), teeter=own(teeter),
         lag_inv=own(parts.lag_inv), af_alpha0=af.alpha0_rad, af_dalpha=af.dalpha_rad, af_cl=own(af.cl),
         af_cd=own(af.cd), af_cm=own(af.cm),
@@ -182,8 +183,9 @@ def compile_model(rotor: Rotor, flight: FlightCondition = FlightCondition(),
         glh=np.ascontiguousarray(np.array([phi.T @ s.HL[b] @ phi for b in range(2)])),
         ugl0=np.ascontiguousarray(np.array([minv @ (phi.T @ s.gl0[b]) for b in range(2)])),
         uglh=np.ascontiguousarray(np.array([minv @ (phi.T @ s.HL[b] @ phi) for b in range(2)])),
-        sv=station_vectors(parts.st), kin=station_shapes(shw, shd, sht),
+        sv=station_vectors(parts.st), xq=None, xqd=None, kin=station_shapes(shw, shd, sht),
     )
+    arrays = with_coordinate_products(arrays)
     model = CompiledModel(arrays, mesh.n_q, phi.shape[1], parts.st.shape[0], s.kinds, s, phi, phi_pinv, rotor,
                           flight, settings)
     if p[P_LAWSON_LAGS] > 0.5:  # only where it lengthens the step (fem-coupled: the rest sets it)

@@ -17,7 +17,7 @@ from .jit import kernel
 
 #: hash of the amra_core modules imported above: Numba's cache does not see them
 #: (tests/core/test_kernel_cache_stamps.py)
-CACHE_STAMP = "ca10b903e0203c0a"
+CACHE_STAMP = "5e956a4a90ad8782"
 
 
 @kernel

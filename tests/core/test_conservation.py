@@ -28,6 +28,7 @@ import pytest
 
 from amra_core import kernel_guard, kernels
 from amra_core.flight import FlightCondition, SolverSettings
+from amra_core.layout import with_coordinate_products
 from amra_core.model import (P_IR, P_SLAG, Y_OMEGA, Y_ZETA0, Y_ZETAD0, angular_momentum, compile_model,
                              lag_inertias, mechanical_energy, polar_inertia, stable_time_step)
 from amra_core.rotor import BladeStations, Rotor
@@ -96,7 +97,7 @@ def march(model, y0, dt_s, n_rev=N_REV, arrays=None):
 def _mutated(model, **changes):
     """The model's arrays with some terms changed (to show that a test detects a missing term)."""
     a = model.arrays
-    return a._replace(**{k: v(a) for k, v in changes.items()})
+    return with_coordinate_products(a._replace(**{k: v(a) for k, v in changes.items()}))
 
 
 def energy_drift(model, states):
