@@ -17,8 +17,13 @@ def failed_cell(cg: float, gj: float, reason: str) -> CellResult:
 
 
 def cell_class(c: CellResult) -> str:
-    """``stable`` | ``flutter`` (trimmed, unstable) | ``fold`` (no normal autorotation: no trim, or the
-    normal branch overspeeding) | ``windmill-brake`` (a windmill-brake equilibrium) | ``failed``."""
+    """``stable`` | ``flutter`` (trimmed on the normal branch, unstable) | ``fold`` (no normal
+    autorotation: no trim, or the normal branch overspeeding, whether or not a mode grows there: the
+    column's intervals call that stretch ``overspeed``, and the fold line is drawn above it) |
+    ``windmill-brake`` (a windmill-brake equilibrium) | ``failed``. An overspeeding cell keeps the
+    verdict a run from it gives first (``flutter``, ``divergence``: :func:`cells_of_walk`); drawn as
+    flutter it read as flutter below the fold line (fem-coupled axial, CG 40 %: GJ 82-412 red under
+    the fold at 664)."""
     if c.verdict == "failed":
         return "failed"
     if c.verdict == "windmill-brake" or c.branch == "windmill-brake":
@@ -26,7 +31,7 @@ def cell_class(c: CellResult) -> str:
     if c.stable:
         return "stable"
     return "fold" if c.boundary_kind in ("fold", "overspeed") or c.verdict in ("no-autorotation", "overspeed") \
-        else "flutter"
+        or c.branch == "overspeed" else "flutter"
 
 
 # ----------------------------------------------------------------------------- columns

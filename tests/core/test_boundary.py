@@ -112,6 +112,26 @@ def test_no_windmill_state_counted_stable(full_map):
     assert crit[0.36] > 250.0 and fold[0.36] is not None and crit[0.36] >= fold[0.36]  # not the old 68
 
 
+def test_a_column_draws_its_overspeeding_stretch_as_fold_not_flutter():
+    """Fem-coupled axial, CG 40 % (the Fig. 11 case): below the fold the walk finds the normal branch
+    overspeeding (rotor speed 52-70 rad/s against 25) with a growing mode (divergence, 250-340 1/s).
+    Its intervals call that stretch ``overspeed`` (no normal autorotation) and the fold line sits
+    above it; its cells were drawn red as flutter, under the line saying no autorotation exists. Every
+    cell is now drawn as the interval it lies in says, and keeps the verdict a run from it gives."""
+    from amra_core.boundary import compute_column
+    spec = MapSpec(rotor="paper-boundary", fidelity="fem-coupled", ea=EA, cg_values=(0.40,))
+    col = compute_column(spec.column_task(0.40))
+    drawn = {"overspeed": {"fold"}, "fold": {"fold"}, "windmill-brake": {"windmill-brake", "fold"},
+             "flutter": {"flutter"}, "stable": {"stable"}}
+    over = [c for c in col.cells if c.branch == "overspeed"]
+    assert over and any(not c.stable and c.verdict in ("flutter", "divergence") for c in over)
+    for c in col.cells:
+        iv = next(i for i in col.intervals if i["gj_lo_nm2"] <= c.gj_nm2 <= i["gj_hi_nm2"])
+        assert cell_class(c) in drawn[iv["kind"]], (c.gj_nm2, c.verdict, c.branch, iv["kind"])
+    assert all(cell_class(c) == "fold" for c in over)
+    assert col.fold_gj > max(c.gj_nm2 for c in over)
+
+
 def test_critical_gj_rises_as_cg_moves_aft(full_map):
     """The paper: CG aft of the EA is destabilising (model-notes section 6). From CG 0.36 aft every
     column's trim branch folds, and the fold GJ (top of its ``fold`` interval) rises monotonically;
