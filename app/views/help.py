@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import panel as pn
 
+from amra_core.trim import WINDMILL_BRAKE_RATIO
+
 from ..inputs import tooltip
 
 PAPER_URL = "http://eprints.gla.ac.uk/4967/"
@@ -21,9 +23,10 @@ VERDICTS = (
     ("fold / no-autorotation", "No torque balance exists: the nose-up elastic twist has raised the blade pitch "
                                "until the root stalls and drag wins. The rotor speed decays from the start; "
                                "on the map, the fold GJ is the stiffness below which this happens."),
-    ("windmill-brake", "An equilibrium with a descent rate of 4-5 times the hover induced velocity and little "
-                       "inflow: real, but the paper's failure state (descent speed 'increases to an "
-                       "unacceptable value'), not autorotation."),
+    ("windmill-brake", f"An equilibrium descending faster than {WINDMILL_BRAKE_RATIO:g} times the hover induced "
+                       "velocity v_h (beyond the turbulent-wake region; the map finds them at 2-6 v_h) with little "
+                       "inflow: real, but the paper's failure state (descent speed 'increases to an unacceptable "
+                       "value'), not autorotation."),
     ("undetermined", "Too little data to judge: the run is shorter than a few cycles of its slowest mode, or "
                      "it had not settled. Run longer; it is never counted as stable."),
     ("numerical-failure", "The state became non-finite. Reported, never hidden: try a shorter step or another "

@@ -244,3 +244,15 @@ def test_the_locus_circle_names_the_sampled_gj_it_shows():
     overlay = view._locus(pts, 100.0)
     circle = [el for el in overlay if el.label == "nearest sampled GJ with a trim"]
     assert len(circle) == 1 and list(circle[0].dimension_values("gj_nm2")) == [424.0]
+
+
+def test_the_help_gives_the_windmill_brake_threshold_the_solver_uses():
+    """The Help said windmill-brake meant a descent of 4-5 v_h; the trims and the runs call every
+    equilibrium beyond 2 v_h so (map cells sit at 2.05-2.9 v_h). The Help now states the solver's own
+    ratio, and a cell just beyond it is one."""
+    from amra_core import equilibrium, verdict
+    from app.views.help import VERDICTS
+    text = dict(VERDICTS)["windmill-brake"]
+    assert "4-5 times" not in text
+    assert f"faster than {equilibrium.WINDMILL_BRAKE_RATIO:g} times the hover induced velocity" in text
+    assert equilibrium.WINDMILL_BRAKE_RATIO == 2.0 and 2.0 <= verdict.WINDMILL_BRAKE_RATIO <= 2.1
