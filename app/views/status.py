@@ -38,9 +38,13 @@ def _growth(verdict) -> str:
 
 def _frequency(verdict) -> str:
     """The run's dominant frequency; once the run has a growth rate, a missing one means that no
-    oscillation was resolved (fewer than two cycles of it in the record: a drift, not a mode)."""
+    oscillation was resolved: the largest deviation's spectrum peaks below two cycles per record
+    (:func:`amra_core.verdict._dominant_frequency`), a slow one-way change such as a recovering or a
+    collapsing rotor speed. ("A slow drift from the trim" read false beside a collapse far from any
+    trim, and beside a stable run's decay.)"""
     if verdict.frequency_hz is None and verdict.growth_rate_per_s is not None:
-        return "none resolved: at the end of the run only a slow drift departs from the trim (1/rev is the trim's own)"
+        return ("none resolved: the largest deviation changes too slowly (under two cycles over the run: "
+                "a one-way change, not an oscillation; 1/rev is the trim's own)")
     return _fmt(verdict.frequency_hz, "Hz")
 
 

@@ -9,9 +9,11 @@ def test_a_run_without_a_resolved_oscillation_says_so():
     html = verdict_html(Verdict("stable", -0.55, None, None, explanation="the perturbation decays"), True)
     assert "none resolved" in html and "0.1 Hz" not in html
     # beside a forward-flight run's visible 1/rev teeter, the card says that motion is the trim's own;
-    # beside the nominal blade's teeter oscillation, visible for a second before it decays, that it is
-    # the end of the run that drifts
-    assert "at the end of the run only a slow drift departs from the trim (1/rev is the trim's own)" in html
+    # it claims no "drift from the trim", false beside a collapse far from any trim (Fig. 10) and
+    # beside a stable run's decay: what it says is what the frequency analysis found
+    assert ("the largest deviation changes too slowly (under two cycles over the run: a one-way change, "
+            "not an oscillation; 1/rev is the trim's own)") in html
+    assert "drift" not in html
 
 
 def test_a_resolved_frequency_is_shown_with_its_unit():
