@@ -24,7 +24,7 @@ from . import __version__, kernel_guard, kernels
 from .flight import FlightCondition, SettingsError, SolverSettings, _num
 from .model import N_Y_FIXED, Y_OMEGA, CompiledModel, advance_ratio, compile_model, run_time_step, transfer_state
 from .rotor import Rotor
-from .trim import TrimResult, trim
+from .trim import TrimResult, gj_mean_of, trim
 from .verdict import Verdict, judge, judge_after_change
 
 HISTORY_COLUMNS = kernels.HISTORY_COLUMNS
@@ -117,13 +117,19 @@ class Simulation:
                 self.start_note = _forward_start_note(be, case.flight)
                 self.model = _with_controls_of(self.model, tr.model,
                                                airspeed_m_s=_requested_airspeed(be, case.flight, self.model))
+            elif "gj_scale" not in be:  # no branch to follow: even the stiff start has no normal autorotation
+                self.start_note = (f"{tr.reason or 'no steady autorotation for these parameters'}: started from the "
+                                   f"equilibrium of that stiffer blade (mean GJ {gj_mean_of(tr.model):.0f} N m^2/rad, "
+                                   f"rotor speed {tr.omega_rad_s:.2f} rad/s, descent rate {tr.descent_rate_m_s:.1f} m/s) "
+                                   f"with the requested parameters switched on at t = 0")
+                self.model = _with_controls_of(self.model, tr.model)
             else:
                 self.start_note = (("no trim found for these parameters (the branch's last trim is already unstable)"
                                     if be.get("last_trim_unstable") else "no steady autorotation for these parameters")
                                    + f": started from the end of the trim "
-                                   f"branch (GJ x{be.get('gj_scale', float('nan')):.3g}, mean GJ "
-                                   f"{be.get('gj_mean_nm2', float('nan')):.0f} N m^2/rad, rotor speed "
-                                   f"{be.get('omega_rad_s', float('nan')):.2f} rad/s) with the requested parameters "
+                                   f"branch (GJ x{be['gj_scale']:.3g}, mean GJ "
+                                   f"{be['gj_mean_nm2']:.0f} N m^2/rad, rotor speed "
+                                   f"{be['omega_rad_s']:.2f} rad/s) with the requested parameters "
                                    f"switched on at t = 0")
                 # keep the branch-end flight controls (tilt, holds) but the requested structure
                 self.model = _with_controls_of(self.model, tr.model)

@@ -325,3 +325,18 @@ def test_the_last_revolution_comes_from_the_tail_and_equals_the_whole_history_an
     assert fast.keys() == slow.keys() and len(fast["azimuth_rad"]) == 36
     for key in fast:
         np.testing.assert_allclose(np.array(fast[key]), np.array(slow[key]), rtol=0, atol=0)
+
+
+def test_a_run_with_no_branch_to_follow_says_where_it_starts_without_nan():
+    """Paper-boundary, GJ 10: even the 30x stiffer start (GJ 300) has no normal autorotation, so the
+    trim has no branch end. The start note read 'the end of the trim branch (GJ xnan, mean GJ nan
+    N m^2/rad, rotor speed nan rad/s)' in the CLI, the card, the toast and the CSV."""
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case, Simulation
+    sim = Simulation(Case(load_preset("paper-boundary").with_overrides(gj_nm2=10.0), FlightCondition(),
+                          SolverSettings("rigid"), t_end_s=0.5))
+    note = sim.start_note
+    assert "nan" not in note.lower()
+    assert note.startswith("no steady autorotation even for a 30x stiffer blade: started from the equilibrium")
+    assert "mean GJ 300 N m^2/rad" in note and f"rotor speed {sim.trim.omega_rad_s:.2f} rad/s" in note
