@@ -96,16 +96,27 @@ def case_meta(case, changes: Iterable[str] = (), verdict: str | None = None) -> 
     return meta
 
 
-def run_meta(sim, verdict=None) -> dict:
+def run_meta(sim, verdict=None, run_state: str | None = None) -> dict:
     """A run's header: its case and changes (:func:`case_meta`), how it started (from a trim, or from
     a branch end with the parameters switched on at t = 0: read alone, t = 0 looked like a trim of
-    the case) and its ``verdict`` (an :class:`amra_core.verdict.Verdict`: class, outcome, the run's
-    fitted growth rate, frequency, collapse time, rotor-speed headline)."""
+    the case), how far it got (``t_reached_s``, and ``run_state``: the caller's words, e.g. a run
+    still going or stopped by its user, else whether it reached its end) and its ``verdict`` (an
+    :class:`amra_core.verdict.Verdict`: class, outcome, the run's fitted growth rate, frequency,
+    collapse time, rotor-speed headline). A file saved mid-run or after a Stop said only ``run_s: 30``
+    above rows ending at 12.7 s."""
     meta = case_meta(sim.case, [what for _, _, what in sim.changes])
     if sim.case.flight.mu:  # the airspeed the trim set (the case alone can only say how it is set)
         meta["airspeed_m_s"] = float(sim.model.arrays.p[P_VH])
         meta["airspeed_from"] = "mu at the trim's rotor speed"
     meta["start"] = sim.start_note
+    reached, end = float(sim.t), float(sim.case.t_end_s)
+    meta["t_reached_s"] = reached
+    if run_state is None:
+        if sim.status not in ("running", "not-started"):  # the solver ended it (failure, rotor stopped, ...)
+            run_state = f"ended at t = {reached:.2f} s of {end:g} s: {sim.status}"
+        else:
+            run_state = "reached its end" if reached >= end - 1e-9 else f"at t = {reached:.2f} s of {end:g} s"
+    meta["run_state"] = run_state
     if verdict is not None:
         meta |= {"verdict": verdict.verdict, "outcome": verdict.outcome,
                  "growth_rate_per_s (run's fit)": "" if verdict.growth_rate_per_s is None else verdict.growth_rate_per_s,

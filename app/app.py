@@ -122,6 +122,7 @@ class Dashboard(pn.viewable.Viewer):
         if self.sensitivity is not None:  # its text changes: on the event loop, with the lock
             self.sensitivity.button.on_click(lambda e: s.soon(self.sensitivity.start))
         self.last_history: Optional[np.ndarray] = None
+        self._run_on_screen = False  #: a run started and not reset: what the history export saves
         self._locus_key = None
         self._run_preset = "custom"  #: the preset the current run was started with
         self.live_bar: Optional[pn.Row] = None  #: presentation mode's header bar, made when first shown
@@ -179,6 +180,7 @@ class Dashboard(pn.viewable.Viewer):
         self.status.gj_nm2 = float(np.mean(scenario.case.rotor.stations.gj_nm2))  # the softening moves it
         self.status.run.value = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
+        self._run_on_screen = True
         self._run_preset = self.controls.preset
         self.exports.rename({"history": exports.names_for(self.controls)["history"]})
         return True
@@ -191,6 +193,7 @@ class Dashboard(pn.viewable.Viewer):
             self.status.note.value = teeter_note(beta, *ref)
 
     def reset(self, *_) -> None:
+        self.last_history, self._run_on_screen = None, False  # a download after Reset gave the cleared run's rows
         self.session.forget()
         self.live.clear()
         self.ladder.previous = None
@@ -328,7 +331,14 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ exports
     def history_csv(self):
-        return exports.history_csv(self.session.sim, self.last_history, self.status.verdict)
+        sim = self.session.sim if self._run_on_screen else None  # after Reset: not the cleared run's rows
+        state = None
+        if sim is not None and self.status.verdict is not None:
+            if not self.status.final:
+                state = f"running: saved at t = {sim.t:.2f} s of {sim.case.t_end_s:g} s (the verdict is so far)"
+            elif self.status.solver_status == "stopped":
+                state = f"stopped by its user at t = {sim.t:.2f} s of {sim.case.t_end_s:g} s"
+        return exports.history_csv(sim, self.last_history, self.status.verdict, state)
 
     def modes_csv(self):
         return exports.modes_csv(self.modes.frame, self.controls, self.modes.about)

@@ -19,12 +19,13 @@ from amra_core.simulation import HISTORY_COLUMNS
 LABELS = {"history": "Time histories (CSV)", "modes": "Mode table (CSV)", "map": "Boundary map (CSV)"}
 
 
-def history_csv(sim, history: np.ndarray | None = None, verdict=None) -> io.StringIO:
+def history_csv(sim, history: np.ndarray | None = None, verdict=None, run_state: str | None = None) -> io.StringIO:
     """The full-resolution history of ``sim`` (a Simulation; ``history`` overrides its rows):
-    columns :data:`HISTORY_COLUMNS` (SI units in the names), the case, its changes, its start and
-    its ``verdict`` (a Verdict) above."""
+    columns :data:`HISTORY_COLUMNS` (SI units in the names), the case, its changes, its start, how
+    far it got (``run_state``, see :func:`amra_core.export.run_meta`) and its ``verdict`` (a Verdict)
+    above. Without a run: the header row and a line saying so."""
     h = history if history is not None else (sim.history if sim is not None else np.zeros((0, len(HISTORY_COLUMNS))))
-    meta = run_meta(sim, verdict) if sim is not None else {}
+    meta = run_meta(sim, verdict, run_state) if sim is not None else {"run_state": "no run (none yet, or reset)"}
     return io.StringIO(table_csv(HISTORY_COLUMNS, h, meta))
 
 

@@ -126,7 +126,7 @@ class StatusView(pn.viewable.Viewer):
         self.badge = text(badge_html(None, False), "amra-badge", width=360, sizing_mode=None)
         self.run = text(run_html("idle"), "amra-run-status")
         self.note = text("", "amra-live-note")
-        self.verdict = None
+        self.verdict, self.final, self.solver_status = None, False, ""
         self.notify = notify
         self.case = ""  #: the case of the run the card speaks of (set when a run starts)
         self.case_at_start = ""  #: ... as it started (before any live change)
@@ -155,7 +155,7 @@ class StatusView(pn.viewable.Viewer):
             self.case = f"{self.case_at_start} · live: {'; '.join(self.live_changes)}"
 
     def show(self, verdict, final: bool, status: str = "", start_note: str = "") -> None:
-        self.verdict = verdict
+        self.verdict, self.final, self.solver_status = verdict, final, status
         self.card.value = verdict_html(verdict, final, status, start_note, self.case)
         self.badge.value = badge_html(verdict, final, self.gj_nm2)
         if final and status == "numerical-failure":

@@ -37,12 +37,39 @@ def test_a_run_streams_into_the_plots_and_ends_with_a_verdict(dash, wait):
     # how the run started and what its verdict says, beside the rows (an untrimmed run's t = 0 read
     # as a trim of the case)
     assert "# start: started from the trimmed steady autorotation plus the perturbation" in meta
+    assert "# run_state: reached its end" in meta
+    t_reached = float(next(ln for ln in meta if ln.startswith("# t_reached_s: ")).split(": ")[1])
+    assert t_reached == pytest.approx(1.0, abs=0.01) and t_reached == pytest.approx(dash.last_history[-1, 0], abs=0.01)
     assert "# outcome: undetermined" in meta and any(ln.startswith("# growth_rate_per_s (run's fit): ") for ln in meta)
     assert any(ln.startswith("# rotor_speed: rotor speed kept") for ln in meta)
     assert csv[len(meta)] == ",".join(HISTORY_COLUMNS) and len(csv) == len(meta) + len(dash.last_history) + 1
     assert dash.exports.buttons["history"].filename == "amra-paper-boundary-rigid-gj1500-cg40-history.csv"
     from app.exports import names_for  # a map per EA and aero model: two EAs were one file name
     assert names_for(dash.controls)["map"] == "amra-paper-boundary-rigid-theodorsen-ea32-map.csv"
+
+
+def test_a_history_saved_mid_run_after_a_stop_or_after_reset_says_how_far_the_run_got(dash, wait):
+    """A file saved at t = 12 s of a 30 s run said '# verdict: stable' and '# run_s: 30' and nothing
+    of the run still going; after Stop, nothing of the stop; after Reset it still held the cleared
+    run's rows (an engineer's find)."""
+    def header():
+        return [ln for ln in dash.history_csv().getvalue().splitlines() if ln.startswith("# ")]
+
+    dash.controls.param.update(run_s=30.0, speed=1.0)
+    dash.start_run()
+    pump_until(dash, lambda: dash.status.verdict is not None and not dash.status.final, wait, what="a verdict so far")
+    meta = header()
+    state = next(ln for ln in meta if ln.startswith("# run_state: "))
+    assert state.startswith("# run_state: running: saved at t = ") and state.endswith(" of 30 s (the verdict is so far)")
+    dash.controls.param.trigger("stop")
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the stop")
+    meta = header()
+    t_end = float(next(ln for ln in meta if ln.startswith("# t_reached_s: ")).split(": ")[1])
+    assert 0.0 < t_end < 30.0
+    assert f"# run_state: stopped by its user at t = {t_end:.2f} s of 30 s" in meta
+    dash.reset()
+    csv = dash.history_csv().getvalue().splitlines()
+    assert "# run_state: no run (none yet, or reset)" in csv and csv[-1] == ",".join(HISTORY_COLUMNS)
 
 
 def test_moving_gj_mid_run_applies_live_and_the_run_continues(dash, wait):
