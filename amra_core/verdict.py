@@ -479,8 +479,10 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
     wb = _windmill_brake(h, cols, t, window, hover_induced_m_s) if axial else None
     if wb is not None and not trimmed and collapse is None and status != "rotor-stopped":
         vd0, vd_end, x_end = wb
+        # (started on the windmill-brake side it may fall: "rose from 39.0 to 38.4 m/s" was printed)
+        went = "rose" if vd_end > vd0 else "went"
         return Verdict("no-autorotation", growth, freq, None, amp_end,
-                       f"normal autorotation was lost: the descent rate rose from {vd0:.1f} to {vd_end:.1f} m/s "
+                       f"normal autorotation was lost: the descent rate {went} from {vd0:.1f} to {vd_end:.1f} m/s "
                        f"= {x_end:.1f} v_h, the windmill-brake state (V_c/v_h < -{WINDMILL_BRAKE_RATIO:g}), while "
                        f"the rotor speed went from {om[0]:.1f} to {om[-1]:.1f} rad/s", "runaway")
     if not trimmed:

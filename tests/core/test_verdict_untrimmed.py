@@ -76,3 +76,22 @@ def test_untrimmed_run_still_moving_is_undetermined():
     h = history(lambda t: OM0 * np.where(t < 3, 1 - 0.2 * t / 3, 0.8 + 0.01 * (t - 3)), lambda t: 10.0 + 0 * t)
     v = run_judge(h, trimmed=False)
     assert v.verdict == "undetermined" and "run longer" in v.explanation, v
+
+
+def test_a_descent_rate_that_fell_is_not_said_to_have_risen():
+    """Paper-boundary, fem-torsion, GJ 10: the run starts on the windmill-brake side (no branch to
+    follow) and its descent rate falls a little; the explanation read 'the descent rate rose from 38.8
+    to 38.3 m/s'."""
+    import re
+
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case, Simulation
+    sim = Simulation(Case(load_preset("paper-boundary").with_overrides(gj_nm2=10.0), FlightCondition(),
+                          SolverSettings("fem-torsion"), t_end_s=2.0))
+    sim.run()
+    v = sim.verdict()
+    m = re.search(r"the descent rate (\w+) from ([\d.]+) to ([\d.]+) m/s", v.explanation)
+    assert v.verdict == "no-autorotation" and m is not None, v.explanation
+    word, a, b = m.group(1), float(m.group(2)), float(m.group(3))
+    assert b < a and word == "went"
