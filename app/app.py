@@ -341,7 +341,7 @@ class Dashboard(pn.viewable.Viewer):
         return exports.history_csv(sim, self.last_history, self.status.verdict, state)
 
     def modes_csv(self):
-        return exports.modes_csv(self.modes.frame, self.controls, self.modes.about)
+        return exports.modes_csv(self.modes.full_frame, self.controls, self.modes.about)
 
     def map_csv(self):
         return self.map.csv() if self.map is not None else map_csv([], complete=False)

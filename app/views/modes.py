@@ -32,9 +32,12 @@ LOG_GJ_DIM = Dim("log_gj", label="log10 GJ", unit="N m²/rad")
 CurrentGJ = Stream.define("CurrentGJ", gj=1500.0)
 
 
-def modes_frame(modes) -> pd.DataFrame:
-    """The mode table (aero-lag modes left out): label, frequency [Hz], damping ratio, real part [1/s]."""
-    rows = [(m.label, round(m.frequency_hz, 3), round(m.damping_ratio, 4), round(m.real_part_per_s, 4),
+def modes_frame(modes, shown: bool = True) -> pd.DataFrame:
+    """The mode table (aero-lag modes left out): label, frequency [Hz], damping ratio, real part [1/s];
+    rounded as the page shows it, or (``shown=False``) at full precision, for the export (its file had
+    a frequency of 0.003 Hz: the README promises 8 significant digits)."""
+    r = (lambda x, n: round(x, n)) if shown else (lambda x, n: float(x))
+    rows = [(m.label, r(m.frequency_hz, 3), r(m.damping_ratio, 4), r(m.real_part_per_s, 4),
              "yes" if m.real_part_per_s < 1e-3 else "NO") for m in modes if m.label != "aero lag"]
     return pd.DataFrame(rows, columns=MODE_COLUMNS)
 
@@ -61,7 +64,7 @@ def critical_frame(points) -> pd.DataFrame:
 class ModesView(pn.viewable.Viewer):
     def __init__(self, session, **params):
         super().__init__(**params)
-        self.frame = modes_frame([])
+        self.frame = self.full_frame = modes_frame([])
         self.about: dict = {}  #: the trim and method of the table (set with it)
         self.table = pn.pane.DataFrame(self.frame, index=False, sizing_mode="stretch_width", max_height=320,
                                        name="mode-table")
@@ -86,6 +89,7 @@ class ModesView(pn.viewable.Viewer):
         self.about = {"trim_omega_rad_s": result.get("omega_rad_s"), "trim_descent_rate_m_s": result.get("descent_rate_m_s"),
                       "method": result.get("method", "none (no trim)"), "stable": result.get("stable")}
         self.frame = modes_frame(modes)
+        self.full_frame = modes_frame(modes, shown=False)  #: what the export writes
         self.table.object = self.frame
         self.info.object = units_as_shown(result.get("text", ""))
         # no trim, no modes: the select said "(choose a mode)" over nothing (Fig. 10 at GJ 100)

@@ -175,6 +175,15 @@ def test_analyses_fill_the_mode_table_locus_and_fan(dash, wait):
     # what the table is of: its trim and method (the page says them above the table; the file did not)
     assert "# trim_omega_rad_s: 33.89" in text and "# method: eigenvalues" in text and "# stable: True" in text
     assert dash.exports.buttons["modes"].filename == "amra-paper-boundary-rigid-gj1500-cg40-modes.csv"
+    # the file's numbers at the export's 8 significant digits, not the table's rounding (a frequency
+    # of 0.003 Hz was written as shown)
+    import io
+
+    import pandas as pd
+    written = pd.read_csv(io.StringIO(text), comment="#")
+    np.testing.assert_allclose(written["frequency [Hz]"], dash.modes.full_frame["frequency [Hz]"], rtol=1e-7)
+    np.testing.assert_allclose(written["frequency [Hz]"], f["frequency [Hz]"], atol=5e-4)
+    assert (written["real part [1/s]"] != written["real part [1/s]"].round(4)).any()
     fan = dash.fan.pipe.data
     assert len(fan["modes"]) >= 5
     teeter = dict(fan["modes"])["teeter"]  # the rigid tilt of a teetering rotor is exactly 1/rev
