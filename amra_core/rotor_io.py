@@ -210,7 +210,9 @@ def rotor_from_dict(data: dict) -> Rotor:
         raise RotorError(f"name = {_short(top['name'])} is not allowed: must be a text in quotes")
     if "incidence_deg" in data and "incidence_rad" in data:
         raise RotorError("incidence_deg and incidence_rad are both given: give one")
+    in_degrees = []  # angles the file gives in degrees (its messages name them so)
     if "incidence_deg" in data:
+        in_degrees.append("incidence")
         inc = data.pop("incidence_deg")
         top["incidence_rad"] = math.radians(inc) if _is_num(inc) else inc
     elif "incidence_rad" in data:
@@ -226,6 +228,7 @@ def rotor_from_dict(data: dict) -> Rotor:
         if deg_key in blade and rad_key in blade:
             raise RotorError(f"blade.{deg_key} and blade.{rad_key} are both given: give one")
         if deg_key in blade:
+            in_degrees.append(f"blade.{deg_key.removesuffix('_deg')}")
             v = blade.pop(deg_key)
             blade[rad_key] = [math.radians(x) if _is_num(x) else x for x in v] if isinstance(v, list) else (
                 math.radians(v) if _is_num(v) else v)
@@ -256,16 +259,30 @@ def rotor_from_dict(data: dict) -> Rotor:
                                  f"({exc})") from None
         return Rotor(stations=stations, point_mass=pm, sources=tuple(sorted(sources.items())), **top)
     except RotorError as exc:
-        raise RotorError(_as_in_the_file(str(exc), scalars)) from None
+        raise RotorError(_as_in_the_file(str(exc), scalars, in_degrees)) from None
 
 
-def _as_in_the_file(message: str, scalars: list) -> str:
-    """A message about the blade's stations named as the file writes them: its ``[blade]`` table, and a
+_NUM = r"[-+]?(?:inf|nan|[0-9]+\.?[0-9]*(?:e[-+]?[0-9]+)?)"
+
+
+def _as_in_the_file(message: str, scalars: list, in_degrees: list = ()) -> str:
+    """A message about the blade's stations named as the file writes them: its ``[blade]`` table, a
     value given once for the whole span without a station index ("stations.chord_m[0] = -0.197" read
-    as a list the file does not have)."""
+    as a list the file does not have), and an angle the file gives in degrees in degrees
+    (``in_degrees``: names without their ``_rad``; "incidence_rad = 1.3962634015954636 ... [-0.349...,
+    0.349...]" answered a file that says ``incidence_deg = 80``)."""
     message = message.replace("stations.", "blade.")
     for name in scalars:
         message = re.sub(rf"blade\.{name}\[\d+\]", f"blade.{name}", message)
+    for base in in_degrees:
+        def degrees(text: str) -> str:  # every number of a value or a range, radians to degrees
+            return re.sub(_NUM, lambda n: f"{math.degrees(float(n.group())):.6g}", text)
+
+        def to_deg(m):
+            reason = re.sub(rf"\[{_NUM}, {_NUM}\]", lambda r: degrees(r.group()) + " deg", m.group("why"))
+            return f"{base}_deg{m.group('i') or ''} = {degrees(m.group('v'))} is not allowed: {reason}"
+        message = re.sub(rf"{re.escape(base)}_rad(?P<i>\[\d+\])? = (?P<v>.*?) is not allowed: (?P<why>.*)$", to_deg,
+                         message)
     return message
 
 

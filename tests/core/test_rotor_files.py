@@ -205,7 +205,13 @@ BAD_FILES = [
     ("absurd-gj", (r"^gj_nm2 = \[1534\.0,", "gj_nm2 = [1e200,"), ["gj_nm2[0]", "1e+200", "(0.0, 10000000000.0]"]),
     ("absurd-hub-inertia", (r"^hub_teeter_inertia_kg_m2 = [0-9.]+", "hub_teeter_inertia_kg_m2 = 1e300"),
      ["hub_teeter_inertia_kg_m2", "1e+300", "[0.0, 1000000.0]"]),
-    ("incidence-too-large", (r"^incidence_deg = 2\.5", "incidence_deg = 45.0"), ["incidence_rad", "0.785"]),
+    # an angle the file gives in degrees is named and ranged in degrees (it read "incidence_rad =
+    # 0.785... must lie in [-0.349..., 0.349...]" for a file that says incidence_deg = 45)
+    ("incidence-too-large", (r"^incidence_deg = 2\.5", "incidence_deg = 45.0"),
+     ["incidence_deg = 45 is not allowed: must lie in [-20, 20] deg"]),
+    ("twist-too-large", (r"^twist_deg = 0\.0", "twist_deg = 400.0"),
+     ["blade.twist_deg = 400 is not allowed: must lie in [-45, 45] deg"]),
+    ("twist-nan", (r"^twist_deg = 0\.0", "twist_deg = nan"), ["blade.twist_deg = nan", "in [-45, 45] deg"]),
 ]
 
 
