@@ -394,9 +394,7 @@ class Dashboard(pn.viewable.Viewer):
 
         def opened(event):
             if not event.new and not len(card):
-                card.extend([num("airspeed_m_s"), num("omega_hold_rad_s"),
-                             num("map_columns", widget_cls=pn.widgets.IntInput),
-                             num("map_coarse", widget_cls=pn.widgets.IntInput)])
+                card.extend([num("airspeed_m_s"), num("omega_hold_rad_s"), num("map_columns"), num("map_coarse")])
         card.param.watch(opened, "collapsed")
         return card
 

@@ -1,15 +1,18 @@
 """The controls' own widgets: number inputs that say what is wrong, and GJ's log-scale slider.
 
 A widget made by ``from_param`` carries the parameter's bounds to the browser, which then clamps or
-reverts a typed value without a word (GJ 0, 1e9, a run of -5 s). :func:`checked_input` gives the
-browser no bounds: :class:`~app.controls.Controls` (param) validates the value, and a bad one
-leaves the control as it was with a message under the input naming the allowed range, until the
-next good value. Every tooltip states the unit and allowed range (:func:`tooltip`).
+reverts a typed value without a word (GJ 0, 1e9, a run of -5 s). A number input drops what it
+does not take as a key is pressed, as silently: "1,5" became 15, "12abc" 12, "abc" nothing.
+:func:`checked_input` is therefore a text input read here: :class:`~app.controls.Controls` (param)
+validates the number, and anything else (not a number, a decimal comma, out of range) leaves the
+control as it was with a message under the input naming what was typed and the allowed range, until
+the next good value. Every tooltip states the unit and allowed range (:func:`tooltip`).
 """
 from __future__ import annotations
 
 import html
 import math
+import re
 
 import panel as pn
 import param
@@ -26,16 +29,39 @@ def tooltip(p: param.Parameter) -> str:
 def check_message(p: param.Parameter, label: str, raw) -> str:
     """Why ``raw`` cannot be the value of ``p`` ('' if it can)."""
     rng = allowed(p)
-    if raw is None:  # the browser sends no value for an empty or non-numeric entry ("abc")
-        return f"{label}: not a number (empty or not numeric); allowed {rng}"
+    if raw is None:
+        return f"{label}: not a number (empty); allowed {rng}"
     if isinstance(raw, bool) or not isinstance(raw, (int, float)):
         return f"{label}: {raw!r} is not a number; allowed {rng}"
     if not math.isfinite(raw):
         return f"{label}: {raw} is not a finite number; allowed {rng}"
+    if isinstance(p, param.Integer) and raw != int(raw):
+        return f"{label} = {raw:g} is not a whole number; allowed {rng}"
     lo, hi = p.bounds or (None, None)
     if (lo is not None and raw < lo) or (hi is not None and raw > hi):
         return f"{label} = {raw:g} is out of range: allowed {rng}"
     return ""
+
+
+def read_number(p: param.Parameter, label: str, text) -> tuple:
+    """(the number typed as ``text``, '') or (None, why it is none): a decimal comma is named as such
+    (a number input had made "1,5" 15 without a word)."""
+    raw = "" if text is None else str(text).strip()
+    if not raw:
+        return None, check_message(p, label, None)
+    try:
+        value = float(raw)
+    except ValueError:
+        hint = ""
+        if re.fullmatch(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?", raw):
+            hint = f" (write decimals with a point: {raw.replace(',', '.')})"
+        return None, f"{label}: {raw!r} is not a number{hint}; allowed {allowed(p)}"
+    return (int(value) if isinstance(p, param.Integer) and value == int(value) and math.isfinite(value) else value), ""
+
+
+def shown(value) -> str:
+    """A control's number as its input shows it: 1500, 0.45, 1e-05 (up to 10 significant digits)."""
+    return f"{value:.10g}"
 
 
 #: the message line under an input in the sidebar (light background)
@@ -46,21 +72,14 @@ DARK_MSG_STYLES = {"position": "absolute", "top": "100%", "left": "0", "z-index"
                    "max-width": "none", "color": "#b71c1c", "background": "#ffebee", "font-size": "16px",
                    "font-weight": "600", "padding": "3px 10px", "border-radius": "12px",
                    "box-shadow": "0 1px 4px rgba(0, 0, 0, 0.5)"}
-#: a dark header's light text colour reached the input's spinner arrows (the theme's body colour): white
-#: on white; the arrows take the header's dark colour
-DARK_SPINNER_CSS = ".bk-spin-btn {--bs-body-color: #263238; --color: #263238}"
-
-
-def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widgets.FloatInput, on_dark: bool = False,
-                  **kw) -> pn.Column:
-    """An input for number parameter ``name`` of ``controls``, and its message line (class
-    ``amra-msg``, made at the first bad value: one model less per input at page build). ``on_dark``:
-    the input sits on a dark header (presentation mode), its message a light pill over the page."""
+def checked_input(controls: param.Parameterized, name: str, on_dark: bool = False, **kw) -> pn.Column:
+    """An input for number parameter ``name`` of ``controls`` (a text input: what is typed reaches
+    :func:`read_number` as typed), and its message line (class ``amra-msg``, made at the first bad
+    value: one model less per input at page build). ``on_dark``: the input sits on a dark header
+    (presentation mode), its message a light pill over the page."""
     p = controls.param[name]
     label = p.label or name
-    if on_dark:
-        kw["stylesheets"] = [*kw.get("stylesheets", []), DARK_SPINNER_CSS]
-    widget = widget_cls(value=getattr(controls, name), label=label, description=tooltip(p), **kw)
+    widget = pn.widgets.TextInput(value=shown(getattr(controls, name)), name=label, description=tooltip(p), **kw)
     box = pn.Column(widget, sizing_mode=kw.get("sizing_mode", "stretch_width"), margin=0)
 
     reverting = []  # the box is being set back to the kept value: its message stays
@@ -69,25 +88,27 @@ def checked_input(controls: param.Parameterized, name: str, widget_cls=pn.widget
         if reverting and event.new == reverting[-1]:
             reverting.clear()
             return
-        bad = "" if event.new == getattr(controls, name) else check_message(p, label, event.new)
-        if not bad:
-            try:  # (a value the control already has: set from elsewhere, or typed again)
-                controls.param.update({name: event.new})
-            except Exception as exc:  # noqa: BLE001 - what param refuses is said, not swallowed
-                bad = f"{label}: {exc}"
+        value, bad = read_number(p, label, event.new)
+        if not bad and value != getattr(controls, name):
+            bad = check_message(p, label, value)
+            if not bad:
+                try:
+                    controls.param.update({name: value})
+                except Exception as exc:  # noqa: BLE001 - what param refuses is said, not swallowed
+                    bad = f"{label}: {exc}"
         if len(box) == 1 and bad:
             box.append(pn.pane.HTML("", css_classes=["amra-msg"], sizing_mode=None if on_dark else "stretch_width",
                                     styles=DARK_MSG_STYLES if on_dark else MSG_STYLES, margin=(0, 10, 4, 10)))
         if len(box) > 1:
             box[1].param.update(object=html.escape(bad), visible=bool(bad))
-        if event.new is None:  # emptied (or not numeric): the box shows the value kept, not "NaN"
-            reverting[:] = [getattr(controls, name)]
+        if value is None:  # not a number: the box shows the value kept (a number out of range stays shown)
+            reverting[:] = [shown(getattr(controls, name))]
             pn.state.execute(lambda: setattr(widget, "value", reverting[-1]) if reverting else None,
                              schedule=True)  # after this change has reached the widget
 
     widget.param.watch(typed, "value")
     # a preset, a link or the slider moved the value: the input shows it, and its message goes
-    controls.param.watch(lambda e: setattr(widget, "value", e.new), name)
+    controls.param.watch(lambda e: setattr(widget, "value", shown(e.new)), name)
     return box
 
 

@@ -497,9 +497,12 @@ def test_the_advanced_card_makes_its_inputs_when_first_opened(dash):
     card.collapsed = False
     assert len(card) == 4
     airspeed = card[0][0]
-    assert airspeed.value == 12.0
-    airspeed.value = 15.0
+    assert airspeed.value == "12"
+    airspeed.value = "15"
     assert dash.controls.airspeed_m_s == 15.0
+    columns = card[2][0]  # an Integer control gets an int
+    columns.value = "12"
+    assert dash.controls.map_columns == 12 and isinstance(dash.controls.map_columns, int)
     card.collapsed, card.collapsed = True, False  # closed and opened again: the same four inputs
     assert len(card) == 4
 

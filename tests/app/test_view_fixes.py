@@ -113,7 +113,7 @@ def contrast(fg: str, bg: str) -> float:
 
 
 def _bad_value_message(box):
-    box.objects[0].value = 5.0
+    box.objects[0].value = "5"
     widget, message = box.objects
     assert message.visible and "GJ [N m²/rad] = 5 is out of range: allowed 10 to 10000" in message.object
     return widget, message
@@ -128,16 +128,13 @@ def test_a_message_on_the_dark_header_is_legible_and_keeps_the_header_height():
     assert contrast(st["color"], background) >= 4.5, st  # WCAG AA (#b71c1c on #263238: 1.9)
     assert float(st["font-size"].removesuffix("px")) >= 14, st  # was 90 % of 10 px
     assert st["position"] == "absolute", st  # over the page below: the header keeps its height
-    # the spinner arrows take a dark colour (the header's white had reached them), the caller's
-    # stylesheet stays
+    # the caller's stylesheet stays (a text input: no spinner arrows for the header's white to reach)
     assert ":host input {font-size: 20px; height: 40px}" in widget.stylesheets
-    assert any("spin-btn" in s and "#263238" in s for s in widget.stylesheets if isinstance(s, str))
 
 
 def test_a_message_in_the_sidebar_stays_a_line_under_the_input():
     widget, message = _bad_value_message(checked_input(Controls(), "gj_nm2"))
     assert message.styles == {"color": "#b71c1c", "font-size": "90%"} and message.sizing_mode == "stretch_width"
-    assert not any("spin-btn" in s for s in widget.stylesheets if isinstance(s, str))
 
 
 def test_the_presentation_headers_gj_input_is_the_dark_variant(dash):
