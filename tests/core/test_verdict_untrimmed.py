@@ -95,3 +95,21 @@ def test_a_descent_rate_that_fell_is_not_said_to_have_risen():
     assert v.verdict == "no-autorotation" and m is not None, v.explanation
     word, a, b = m.group(1), float(m.group(2)), float(m.group(3))
     assert b < a and word == "went"
+
+
+@pytest.mark.parametrize("fidelity", ["rigid", "fem-torsion"])
+def test_a_run_that_starts_and_stays_on_the_windmill_brake_side_is_no_overspeed(fidelity):
+    """Paper-boundary, GJ 10, 3 s: no branch to follow, the run starts from the windmill-brake
+    equilibrium (16 rad/s, 38 m/s) and stays on that side while its rotor speed rises to 26 rad/s and
+    falls again. Rigid said 'overspeed: rotor speed ran away upwards' (1.5 x its slow start), the FEM
+    levels 'no-autorotation': every level now says the latter, as the map's windmill-brake cells do."""
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case, Simulation
+    sim = Simulation(Case(load_preset("paper-boundary").with_overrides(gj_nm2=10.0), FlightCondition(),
+                          SolverSettings(fidelity), t_end_s=3.0))
+    sim.run()
+    v = sim.verdict()
+    if fidelity == "rigid":  # what made it read as an overspeed: 1.5 x its slow start
+        assert sim.history[-1, 2] > 1.5 * sim.history[0, 2]
+    assert v.verdict == "no-autorotation" and "the windmill-brake state" in v.explanation, (v.verdict, v.explanation)
