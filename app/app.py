@@ -123,6 +123,7 @@ class Dashboard(pn.viewable.Viewer):
             self.sensitivity.button.on_click(lambda e: s.soon(self.sensitivity.start))
         self.last_history: Optional[np.ndarray] = None
         self._run_on_screen = False  #: a run started and not reset: what the history export saves
+        self.refused: dict = {}  #: the number inputs' messages about values they refused, by control
         self._locus_key = None
         self._run_preset = "custom"  #: the preset the current run was started with
         self.live_bar: Optional[pn.Row] = None  #: presentation mode's header bar, made when first shown
@@ -176,6 +177,9 @@ class Dashboard(pn.viewable.Viewer):
         self.live.clear()
         self.status.reset()
         self._clear_messages()  # each run starts with a clean message area
+        if self.refused:  # a box still shows a refused value (scrolled out of view, it went unseen)
+            self.notify("this run uses the values kept, not the ones refused: " + "; ".join(self.refused.values()),
+                        "warning")
         self.status.case = case_label(self.controls, scenario)
         self.status.gj_nm2 = float(np.mean(scenario.case.rotor.stations.gj_nm2))  # the softening moves it
         self.status.run.value = run_html("starting ...")
@@ -369,7 +373,7 @@ class Dashboard(pn.viewable.Viewer):
             return cls.from_param(c.param[name], **tip, **kw)
 
         def num(name, css=None, **kw):  # typed numbers: a bad one gets a message under its input
-            return checked_input(c, name, css_classes=[css] if css else [], **kw)
+            return checked_input(c, name, css_classes=[css] if css else [], refused=self.refused, **kw)
         full, sel, slider = {"sizing_mode": "stretch_width"}, pn.widgets.Select, pn.widgets.FloatSlider
         button = pn.widgets.Button.from_param
         return pn.Column(
@@ -417,7 +421,8 @@ class Dashboard(pn.viewable.Viewer):
             button(c.param.run, button_type="primary", css_classes=["amra-present-run"], width=110, height=44,
                    description=None),
             button(c.param.stop, button_type="warning", width=110, height=44, description=None),
-            checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, on_dark=True, **big),
+            checked_input(c, "gj_nm2", css_classes=["amra-present-gj"], width=170, on_dark=True, refused=self.refused,
+                          **big),
             self.status.badge, margin=0)
 
     def main(self) -> pn.Column:

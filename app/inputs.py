@@ -72,11 +72,13 @@ DARK_MSG_STYLES = {"position": "absolute", "top": "100%", "left": "0", "z-index"
                    "max-width": "none", "color": "#b71c1c", "background": "#ffebee", "font-size": "16px",
                    "font-weight": "600", "padding": "3px 10px", "border-radius": "12px",
                    "box-shadow": "0 1px 4px rgba(0, 0, 0, 0.5)"}
-def checked_input(controls: param.Parameterized, name: str, on_dark: bool = False, **kw) -> pn.Column:
+def checked_input(controls: param.Parameterized, name: str, on_dark: bool = False, refused: dict | None = None,
+                  **kw) -> pn.Column:
     """An input for number parameter ``name`` of ``controls`` (a text input: what is typed reaches
     :func:`read_number` as typed), and its message line (class ``amra-msg``, made at the first bad
     value: one model less per input at page build). ``on_dark``: the input sits on a dark header
-    (presentation mode), its message a light pill over the page."""
+    (presentation mode), its message a light pill over the page. ``refused``: a dict that holds this
+    input's message while it has one (under ``name``), so a Run can say it uses the value kept."""
     p = controls.param[name]
     label = p.label or name
     widget = pn.widgets.TextInput(value=shown(getattr(controls, name)), name=label, description=tooltip(p), **kw)
@@ -101,6 +103,11 @@ def checked_input(controls: param.Parameterized, name: str, on_dark: bool = Fals
                                     styles=DARK_MSG_STYLES if on_dark else MSG_STYLES, margin=(0, 10, 4, 10)))
         if len(box) > 1:
             box[1].param.update(object=html.escape(bad), visible=bool(bad))
+        if refused is not None:
+            if bad:
+                refused[name] = bad
+            else:
+                refused.pop(name, None)
         if value is None:  # not a number: the box shows the value kept (a number out of range stays shown)
             reverting[:] = [shown(getattr(controls, name))]
             pn.state.execute(lambda: setattr(widget, "value", reverting[-1]) if reverting else None,

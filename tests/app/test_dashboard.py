@@ -6,6 +6,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import panel as pn
 import pytest
 
 from amra_core.simulation import HISTORY_COLUMNS
@@ -277,6 +278,25 @@ def test_bad_input_becomes_a_message_and_the_session_keeps_working(dash, wait):
     dash.controls.param.update(run_s=0.5, speed=20.0)
     assert dash.start_run()
     pump_until(dash, lambda: dash.last_history is not None, wait, what="a good run after the errors")
+
+
+def test_a_run_says_it_uses_the_value_kept_when_a_box_still_shows_a_refused_one(dash):
+    """A teacher typed GJ 50000 (refused: out of range), scrolled on and pressed Run: the run used
+    the kept GJ with nothing saying so where she looked."""
+    sidebar = dash.sidebar()
+    box = next(o for o in sidebar.objects if isinstance(o, pn.Column) and o.objects
+               and "amra-gj" in (o.objects[0].css_classes or []))
+    box.objects[0].value = "50000"
+    assert dash.controls.gj_nm2 == 1500.0 and "gj_nm2" in dash.refused
+    dash.controls.param.update(run_s=0.5, speed=20.0)
+    assert dash.start_run()
+    level, text = dash.messages[-1]
+    assert level == "warning" and text.startswith("this run uses the values kept, not the ones refused: ")
+    assert "GJ [N m²/rad] = 50000 is out of range: allowed 10 to 10000" in text
+    box.objects[0].value = "1500"  # a good value: nothing refused, the next run says nothing of it
+    assert dash.refused == {}
+    dash.controls.param.trigger("stop")
+    assert dash.start_run() and not any("values kept" in t for _, t in dash.messages)
 
 
 def test_uploaded_rotor_is_used(dash):
