@@ -400,7 +400,7 @@ def _failure_explanation(h, cols) -> str:
         why += (f". Before it the tip twist reached {math.degrees(float(np.abs(finite[:, twist]).max())):.0f} deg and "
                 f"the teeter {math.degrees(float(np.abs(finite[:, cols['teeter_rad']]).max())):.0f} deg")
     return (why + ". Too soon to tell a blade motion growing beyond the model's range from a time step too "
-            "long for it (a shorter SolverSettings.dt_s, in the Python API, tells them apart)")
+            "long for it: a shorter step tells them apart (amra simulate --dt-s, or SolverSettings.dt_s)")
 
 
 def _answer_before_failure(h, columns, cols, omega_ref, axial, trimmed, ref_row, perturbation_scale,

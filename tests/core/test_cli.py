@@ -114,6 +114,24 @@ def test_simulate_json_keys(simulate_run):
     assert 0.0 < d["teeter_amplitude_rad"] < 0.05  # the 0.01 rad teeter kick, decaying
 
 
+def test_a_numerical_failure_names_a_step_the_cli_can_set_and_the_cli_sets_it(capsys):
+    """McCutcheon at mu 0.5 (EA 32 %, CG 40 %) stops non-finite at 0.12 s: the message advised 'a
+    shorter SolverSettings.dt_s, in the Python API', which neither the CLI nor the page offered. The
+    CLI takes --dt-s; at a fifth of the step the run stops at the same time (the motion itself leaves
+    the model's range), which is what the option is for."""
+    runs = []
+    for dt in (None, "0.0002"):
+        argv = ["simulate", "--preset", "mccutcheon", "--mu", "0.5", "--ea", "0.32", "--cg", "0.40", "--t-end", "0.5",
+                "--json", "--quiet"] + ([] if dt is None else ["--dt-s", dt])
+        rc, out, err = run_cli(capsys, *argv)
+        assert rc == 0, err
+        runs.append(strict_json(out))
+    default, short = runs
+    assert default["verdict"] == "numerical-failure" and "amra simulate --dt-s" in default["explanation"]
+    assert short["dt_s"] == pytest.approx(2e-4) and default["dt_s"] > 2 * short["dt_s"]
+    assert short["verdict"] == "numerical-failure" and short["sim_time_s"] == pytest.approx(default["sim_time_s"], abs=0.01)
+
+
 def test_simulate_matches_trim(capsys, simulate_run):
     d, _ = simulate_run
     t = cli_json(capsys, "trim", "--preset", "mccutcheon")
@@ -168,6 +186,7 @@ BAD_ARGS = [
     (["trim", "--ea", "32.5"], ["--ea", "32.5", "[0.0, 1.0]", "32.5 % chord is --ea 0.325"]),
     (["sensitivity", "--preset", "paper-boundary", "--cg", "35"], ["--cg", "35", "35 % chord is --cg 0.35"]),
     (["modes", "--omega", "1e9"], ["--omega", "1e9", "[0.0, 200.0]"]),
+    (["simulate", "--dt-s", "0.5"], ["--dt-s", "0.5", "[1e-06, 0.01]"]),
     (["stability", "--mu", "0.9"], ["--mu", "0.9", "[0.0, 0.5]"]),
     (["stability", "--preset", "nosuch"], ["preset", "nosuch", "mccutcheon"]),
 ]
