@@ -110,15 +110,23 @@ def flutter_bands(columns, width_pct: float) -> list:
     return out
 
 
-def map_csv(cells, spec=None, complete: bool = True) -> io.StringIO:
-    """The map's cells, CG in % chord as on the page, numbers to 8 digits; the map's case and
-    whether it is complete in ``#`` lines above (a half-finished map says so)."""
+def map_csv(cells, spec=None, complete: bool = True, columns=()) -> io.StringIO:
+    """The map's cells, CG in % chord as on the page, numbers to 8 digits; the map's case, whether it
+    is complete (a half-finished map says so) and, per finished column, the fold, strong-flutter and
+    critical GJ the page draws as lines, in ``#`` lines above (the file had the cells only)."""
     from amra_core.export import table_csv
     fields = [k for k in CellResult.__dataclass_fields__ if k != "cg"]
     meta = {"complete": "yes" if complete else f"NO: {len(cells)} cells so far, the map was still filling"}
     if spec is not None:
         meta |= {**spec.grid_meta(), "ea_pct_chord": 100 * spec.ea,
                  "cg_columns_pct_chord": " ".join(f"{100 * c:g}" for c in spec.cg_values)}
+
+    def gj(v) -> str:
+        return "none" if v is None else ("above the range" if v == math.inf else f"{v:.8g}")
+    for col in sorted(columns, key=lambda c: c["cg"]):
+        meta[f"column cg_pct_chord {100 * col['cg']:g}"] = (
+            f"fold_gj_nm2 {gj(col.get('fold_gj'))}, strong_flutter_gj_nm2 {gj(col.get('flutter_gj'))}, "
+            f"critical_gj_nm2 {gj(col.get('critical_gj'))}, status {col.get('status', '')}")
     rows = [[100.0 * c.cg] + ["" if getattr(c, k) is None else getattr(c, k) for k in fields]
             for c in sorted(cells, key=lambda c: (c.cg, c.gj_nm2))]
     return io.StringIO(table_csv(["cg_pct_chord", *fields], rows, meta))
@@ -250,7 +258,7 @@ class MapView(pn.viewable.Viewer):
     def csv(self) -> io.StringIO:
         job = self.job
         return map_csv(self.cells, job.spec if job is not None else None,
-                       complete=job is not None and job.state == "done")
+                       complete=job is not None and job.state == "done", columns=job.columns() if job is not None else ())
 
     # -- plot
     def figure(self):

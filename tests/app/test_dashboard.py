@@ -236,6 +236,15 @@ def test_map_cells_arrive_and_picking_one_loads_it(dash, wait):
     assert lines[len(meta)].startswith("cg_pct_chord,gj_nm2,verdict")  # CG in % as on the page
     assert len(lines) == len(meta) + len(dash.map.cells) + 1
     assert lines[-1].split(",")[0] == f"{100 * max(c.cg for c in dash.map.cells):.8g}"
+    # the lines the page draws, per column: fold, strong flutter and critical GJ (the file had cells only)
+    cols = dash.map.job.columns()
+    assert cols and sum(ln.startswith("# column cg_pct_chord ") for ln in meta) == len(cols)
+    for col in cols:
+        line = next(ln for ln in meta if ln.startswith(f"# column cg_pct_chord {100 * col['cg']:g}: "))
+        if col.get("critical_gj") not in (None, math.inf):
+            assert f"critical_gj_nm2 {col['critical_gj']:.8g}" in line, line
+        if col.get("fold_gj") is not None:
+            assert f"fold_gj_nm2 {col['fold_gj']:.8g}" in line, line
     dash.map.job.state = "running"  # a half-finished map says so
     assert "# complete: NO" in dash.map.csv().getvalue()
 
