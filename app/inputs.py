@@ -56,7 +56,8 @@ def read_number(p: param.Parameter, label: str, text) -> tuple:
         if re.fullmatch(r"[-+]?[0-9]*,[0-9]+(?:[eE][-+]?[0-9]+)?", raw):
             hint = f" (write decimals with a point: {raw.replace(',', '.')})"
         return None, f"{label}: {raw!r} is not a number{hint}; allowed {allowed(p)}"
-    return (int(value) if isinstance(p, param.Integer) and value == int(value) and math.isfinite(value) else value), ""
+    whole = isinstance(p, param.Integer) and math.isfinite(value) and value == int(value)
+    return (int(value) if whole else value), ""
 
 
 def shown(value) -> str:

@@ -23,6 +23,8 @@ from app.inputs import checked_input, tooltip
     ("run_s", "1000", "Run length [s] = 1000 is out of range"),
     ("speed", "0", "Playback [sim s per s] = 0 is out of range: allowed 0.1 to 50"),
     ("map_columns", "9.5", "Map CG columns = 9.5 is not a whole number; allowed 2 to 31"),
+    ("map_columns", "inf", "Map CG columns: inf is not a finite number"),
+    ("map_columns", "nan", "Map CG columns: nan is not a finite number"),
 ])
 def test_a_bad_value_is_named_and_the_control_keeps_its_value(name, bad, fragment):
     c = Controls()
