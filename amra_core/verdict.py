@@ -460,12 +460,13 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
     growth, amp_end, amp_start = _envelope_fit(t[:end], e[:end], window)
     freq = _dominant_frequency(t[:end], d[:end])
     oscill = freq is not None and freq >= MIN_FLUTTER_HZ
+    # axial flight only: in forward flight the mass flow is set by the airspeed, and a descent
+    # rate of a few v_h is an ordinary glide (15 m/s at 80 m/s airspeed is an 11 deg path)
+    wb = _windmill_brake(h, cols, t, window, hover_induced_m_s) if axial else None
     # a run with no trim that starts on the windmill-brake side (slow, descending fast) and stays there
     # is not running away when its rotor speed rises from that start: rigid paper-boundary GJ 10 went
     # 16.2 -> 26.6 -> 25.5 rad/s at 34 m/s descent, "overspeed", where the FEM levels said windmill-brake
-    wb_run = not trimmed and axial and bool(hover_induced_m_s) \
-        and h[0, cols["descent_rate_m_s"]] / hover_induced_m_s > WINDMILL_BRAKE_RATIO \
-        and _windmill_brake(h, cols, t, window, hover_induced_m_s) is not None
+    wb_run = not trimmed and wb is not None and wb[0] / hover_induced_m_s > WINDMILL_BRAKE_RATIO
     if status == "overspeed-stop" or (om[-1] > 1.5 * omega_ref and not wb_run):
         return Verdict("overspeed", growth, freq, collapse, amp_end, "rotor speed ran away upwards", "runaway")
     if collapse is not None or status == "rotor-stopped":
@@ -480,9 +481,6 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
                            "coupled oscillation grew, then the rotor speed collapsed", "rotor-speed-collapse")
         return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero",
                        "rotor-speed-collapse")
-    # axial flight only: in forward flight the mass flow is set by the airspeed, and a descent
-    # rate of a few v_h is an ordinary glide (15 m/s at 80 m/s airspeed is an 11 deg path)
-    wb = _windmill_brake(h, cols, t, window, hover_induced_m_s) if axial else None
     if wb is not None and not trimmed and collapse is None and status != "rotor-stopped":
         vd0, vd_end, x_end = wb
         # (started on the windmill-brake side it may fall: "rose from 39.0 to 38.4 m/s" was printed)

@@ -27,12 +27,11 @@ def tooltip(p: param.Parameter) -> str:
 
 
 def check_message(p: param.Parameter, label: str, raw) -> str:
-    """Why ``raw`` cannot be the value of ``p`` ('' if it can)."""
+    """Why the number ``raw`` (None: nothing typed; :func:`read_number` reads text) cannot be the value
+    of ``p`` ('' if it can)."""
     rng = allowed(p)
     if raw is None:
         return f"{label}: not a number (empty); allowed {rng}"
-    if isinstance(raw, bool) or not isinstance(raw, (int, float)):
-        return f"{label}: {raw!r} is not a number; allowed {rng}"
     if not math.isfinite(raw):
         return f"{label}: {raw} is not a finite number; allowed {rng}"
     if isinstance(p, param.Integer) and raw != int(raw):
