@@ -43,8 +43,8 @@ def _frequency(verdict) -> str:
     collapsing rotor speed. ("A slow drift from the trim" read false beside a collapse far from any
     trim, and beside a stable run's decay.)"""
     if verdict.frequency_hz is None and verdict.growth_rate_per_s is not None:
-        return ("none resolved: the largest deviation changes too slowly (under two cycles over the run: "
-                "a one-way change, not an oscillation; 1/rev is the trim's own)")
+        # (in few words: a longer text made the card's row six lines tall at 1280 x 720)
+        return "none resolved: the largest deviation is a one-way change (1/rev is the trim's own)"
     return _fmt(verdict.frequency_hz, "Hz")
 
 
