@@ -8,10 +8,13 @@ drops what has not started; ``close()`` releases the workers. ``map_unordered(fn
 batch form: submit them all and yield ``(arg, Outcome)`` as they complete.
 
 * :class:`LocalPoolExecutor` (default): ``concurrent.futures.ProcessPoolExecutor`` with ``workers``
-  processes (default ``os.cpu_count()``), started with ``spawn`` so a parent holding threads (a
-  dashboard, a dask client) cannot deadlock a forked child. Processes rather than threads: the
-  kernels release the GIL, but trim and the eigen-analysis are largely Python/SciPy; the kernels
-  are Numba-cached, so a worker pays the import (about a second) once, not the compilation.
+  processes (default ``os.cpu_count()``). Processes rather than threads: the kernels release the
+  GIL, but trim and the eigen-analysis are largely Python/SciPy. How they start
+  (:func:`start_method_for_pool`): forked from a single-threaded parent on Linux (``amra map``,
+  a script), so they begin with the parent's imports and already loaded kernels; ``spawn`` from
+  any parent holding threads (a dashboard, a dask client), which a forked child could deadlock on a
+  lock some thread held. A spawned worker pays the import and loads the Numba-cached kernels
+  (0.5-0.9 s) before its first task.
 * :class:`SerialExecutor`: in the calling process, one call per ``wait`` (``workers=1``).
 * :class:`DaskExecutor`: ``distributed.Client(address)`` (``pip install 'amra[dask]'``); the workers
   must be able to import ``amra_core``.
@@ -32,6 +35,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import multiprocessing as mp
 import os
+import sys
 import threading
 import time
 from collections import deque
@@ -62,9 +66,28 @@ def cap_workers(workers: Optional[int]) -> tuple[Optional[int], str]:
     return workers, ""
 
 
+def start_method_for_pool() -> str:
+    """``'fork'`` on Linux when this process runs no other thread than the caller's, else
+    ``'spawn'``. A forked worker skips the import and the kernel loading a spawned one pays first;
+    a parent's other threads (Tornado's, a dask client's, an earlier pool's manager) may hold locks
+    a forked child would wait on for ever, so any of them means ``spawn``. The numbers are the
+    same either way (tests/core/test_executor.py)."""
+    if sys.platform.startswith("linux") and threading.active_count() == 1 \
+            and "fork" in mp.get_all_start_methods():
+        return "fork"
+    return "spawn"
+
+
 def _start_worker(parent_pid: int, nice: int = 0) -> None:
     """Worker initializer: ``nice`` added to the worker's niceness, one BLAS thread
-    (:func:`~amra_core.blas_threads.use_one_blas_thread`), then :func:`_watch_parent`."""
+    (:func:`~amra_core.blas_threads.use_one_blas_thread`), then :func:`_watch_parent`. A forked
+    worker gets back the default SIGTERM action: a handler its parent installed (``amra map``
+    stops the map on SIGTERM) must not run in it, so the pool's terminate stops it."""
+    import signal
+    try:
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    except (ValueError, OSError):
+        pass
     from .blas_threads import use_one_blas_thread
     use_one_blas_thread()
     if nice > 0:
@@ -207,7 +230,7 @@ class LocalPoolExecutor(CellExecutor):
 
     name = "local"
 
-    def __init__(self, workers: Optional[int] = None, start_method: str = "spawn",
+    def __init__(self, workers: Optional[int] = None, start_method: str = "auto",
                  max_retries: int = MAX_RETRIES, nice: int = 0):
         n = (os.cpu_count() or 1) if workers is None else workers
         if isinstance(n, bool) or not isinstance(n, int) or n < 1:
@@ -218,14 +241,18 @@ class LocalPoolExecutor(CellExecutor):
         self.workers = n
         self.nice = int(nice)  #: added to the workers' niceness (a server's maps yield to its runs)
         self.max_retries = int(max_retries)
-        self._ctx = mp.get_context(start_method)
+        if start_method not in ("auto", *mp.get_all_start_methods()):
+            raise ValueError(f"start_method = {start_method!r} is not allowed: choose 'auto' or one of "
+                             f"{', '.join(mp.get_all_start_methods())}")
+        self.start_method = start_method  #: 'auto': :func:`start_method_for_pool` at each (re)start
         self._futures: dict = {}  # future -> [fn, arg, tag, deaths]
         self._pool = self._new_pool()
         self.restarts = 0
         self._abandoned = False
 
     def _new_pool(self):
-        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=self._ctx,
+        method = start_method_for_pool() if self.start_method == "auto" else self.start_method
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=mp.get_context(method),
                                       initializer=_start_worker, initargs=(os.getpid(), self.nice))
 
     def _submit(self, item):

@@ -11,8 +11,9 @@ Measures, and prints as JSON (each map on a local pool of ``--workers`` processe
   column walked in this process (rigid, and fem-coupled unless ``--no-fem``; CG ``--rev-cg``).
 Also the machine's load average before and after, since the machine is shared.
 
-``--pool fresh`` (default) gives every map its own pool of new processes, as ``amra map`` does (each
-worker imports the solver and loads its compiled kernels first: 0.6-0.9 s here); ``--pool warm``
+``--pool fresh`` (default) gives every map its own pool of new processes, as ``amra map`` does (on
+Linux forked from this process, so they start with its imports and kernels; a spawned worker, as a
+threaded parent's, imports the solver and loads its compiled kernels first: 0.6-0.9 s here); ``--pool warm``
 runs every map on one pool whose workers have already computed a column, as a long-lived server's
 pool would.
 

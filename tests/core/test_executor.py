@@ -10,7 +10,7 @@ import pytest
 from amra_core import cli
 from amra_core.boundary import MapSpec, run_map
 from amra_core.executor import (DaskExecutor, LocalPoolExecutor, SerialExecutor, WorkerDied, cap_workers,
-                                 make_executor, worker_cap)
+                                 make_executor, start_method_for_pool, worker_cap)
 
 
 def _square(x):
@@ -149,6 +149,34 @@ def test_pool_map_equals_serial_map(pool_map):
     assert pool_map.complete and "local (2 workers)" == pool_map.executor
     assert pool_map.critical_gj == serial.critical_gj
     assert [c.to_dict() for c in pool_map.cells] == [c.to_dict() for c in serial.cells]
+
+
+def test_pool_starts_by_fork_only_from_a_single_threaded_parent():
+    """Forked workers begin with the parent's imports and kernels (``amra map`` on Linux); a parent
+    with another thread running (a dashboard's) gets spawned ones, which no lock held by that thread
+    can block."""
+    import sys
+    import threading
+    assert threading.active_count() == 1
+    assert start_method_for_pool() == ("fork" if sys.platform.startswith("linux") else "spawn")
+    release = threading.Event()
+    other = threading.Thread(target=release.wait)
+    other.start()
+    try:
+        assert start_method_for_pool() == "spawn"
+    finally:
+        release.set()
+        other.join()
+    with pytest.raises(ValueError, match="start_method = 'thread'"):
+        LocalPoolExecutor(1, start_method="thread")
+
+
+def test_spawned_and_forked_pools_give_the_same_map(pool_map):
+    """The start method changes how a worker begins, never the numbers."""
+    with LocalPoolExecutor(2, start_method="spawn") as ex:
+        spawned = run_map(SPEC, executor=ex)
+    assert spawned.critical_gj == pool_map.critical_gj
+    assert [c.to_dict() for c in spawned.cells] == [c.to_dict() for c in pool_map.cells]
 
 
 def test_a_map_on_a_shared_pool_takes_only_its_own_columns(pool_map):

@@ -116,7 +116,9 @@ def alive(pid) -> bool:
 
 
 def pool_workers(pid) -> list[int]:
-    return [c for c in children(pid) if "spawn_main" in cmdline(c) and "resource_tracker" not in cmdline(c)]
+    """The map's pool workers: every child but multiprocessing's resource tracker (spawned workers
+    run ``spawn_main``; forked ones, ``amra map`` on Linux, the parent's own command line)."""
+    return [c for c in children(pid) if "resource_tracker" not in cmdline(c)]
 
 
 def wait_gone(pids, timeout=15.0) -> list[int]:
