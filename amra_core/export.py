@@ -103,8 +103,9 @@ def run_meta(sim, verdict=None, run_state: str | None = None) -> dict:
     still going or stopped by its user, else whether it reached its end) and its ``verdict`` (an
     :class:`amra_core.verdict.Verdict`: class, outcome, the run's fitted growth rate, frequency,
     collapse time, rotor-speed headline). A file saved mid-run or after a Stop said only ``run_s: 30``
-    above rows ending at 12.7 s."""
-    meta = case_meta(sim.case, [what for _, _, what in sim.changes])
+    above rows ending at 12.7 s. The case is the one the run started with, as the file's name says
+    (a file named GJ 500 said GJ 300 above its rows after a change to 300); the changes follow it."""
+    meta = case_meta(sim.start_case, [what for _, _, what in sim.changes])
     if sim.case.flight.mu:  # the airspeed the trim set (the case alone can only say how it is set)
         meta["airspeed_m_s"] = float(sim.model.arrays.p[P_VH])
         meta["airspeed_from"] = "mu at the trim's rotor speed"

@@ -104,7 +104,8 @@ class Simulation:
     def __init__(self, case: Case, trim_result: Optional[TrimResult] = None):
         if not isinstance(case, Case):
             raise SettingsError(f"case = {case!r} is not allowed: must be a Case")
-        self.case = case
+        self.case = case  #: the case now: its parameters follow every change (set_parameters)
+        self.start_case = case  #: the case as the run started (a file's name and header say this one)
         self.model: CompiledModel = compile_model(case.rotor, case.flight, case.settings)
         tr = trim_result if trim_result is not None else trim(self.model)
         self.trim = tr
@@ -246,6 +247,7 @@ class Simulation:
         new = _with_controls_of(compile_model(rotor, self.case.flight, self.case.settings), self.model)
         if self.status == "not-started":  # nothing runs: only the description changes
             self.case, self.model, self.y = replace(self.case, rotor=rotor), new, np.zeros(new.n_y)
+            self.start_case = self.case
             return
         y = transfer_state(self.y, self.model, new)
         _keep_teeter(y, new, *(v[0] for v in self.model.physical(self.y)))

@@ -59,3 +59,21 @@ def test_a_run_at_an_advance_ratio_writes_the_airspeed_its_trim_set():
     v_disc = meta["airspeed_m_s"] * math.cos(sim.model.arrays.p[P_ALPHA_S])
     assert v_disc == pytest.approx(0.1 * sim.y[Y_OMEGA] * rotor.radius_m, rel=1e-9)
     assert meta["airspeed_from"] == "mu at the trim's rotor speed"
+
+
+def test_a_run_changed_live_writes_the_case_it_started_with_and_then_its_changes():
+    """The dashboard names a history file after the case at Run (``...-gj500-...``); after a live
+    change to GJ 300 its header said ``gj_nm2 (span mean): 300`` above rows that began at 500."""
+    from amra_core.export import run_meta
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case, Simulation
+    rotor = load_preset("paper-boundary").with_overrides(gj_nm2=500.0)
+    sim = Simulation(Case(rotor, FlightCondition(), SolverSettings("rigid"), t_end_s=0.2))
+    sim.advance(span_s=0.05)
+    sim.set_parameters(gj_nm2=300.0)
+    sim.advance(span_s=0.05)
+    meta = run_meta(sim)
+    assert meta["gj_nm2 (span mean)"] == pytest.approx(500.0)
+    assert meta["case_key"] == sim.start_case.key() != sim.case.key()
+    assert meta["change 1"].startswith("the change to GJ 300 N m^2/rad at t = 0.05")
