@@ -39,7 +39,7 @@ def register(sub) -> None:
                                    "and the fold bracketed to --tol.")
     column_case_args(p)
     p.add_argument("--cg", type=value_range("--cg", 0.0, 1.0, True), default=(0.20, 0.50, 16),
-                   help="CG columns A:B:N [chord fraction] (default 0.20:0.50:16)")
+                   help="CG columns A:B:N, or one column A [chord fraction] (default 0.20:0.50:16)")
     p.add_argument("--gj", type=value_range("--gj", 1.0, 1e6, False), default=(30.0, 3000.0),
                    help="GJ range A:B [N m^2/rad], log scale (default 30:3000)")
     p.add_argument("--tol", type=number("--tol", 1e-4, 1.0), default=0.02,

@@ -111,11 +111,14 @@ def emit(obj, as_json):
 
 
 def value_range(name, lo, hi, with_count):
-    """Parser of ``A:B`` (or ``A:B:N`` with ``with_count``) with both ends in [lo, hi]."""
-    form = "A:B:N" if with_count else "A:B"
+    """Parser of ``A:B`` (or ``A:B:N`` with ``with_count``, where one value ``A`` means ``A:A:1``)
+    with both ends in [lo, hi]."""
+    form = "A:B:N (or one value A)" if with_count else "A:B"
 
     def parse(text):
         parts = text.split(":")
+        if with_count and len(parts) == 1:  # one column, as a user checking one cell writes it
+            parts = [parts[0], parts[0], "1"]
         if len(parts) != (3 if with_count else 2):
             raise argparse.ArgumentTypeError(f"{name} = {text!r} is not allowed: give {form}")
         try:

@@ -371,3 +371,19 @@ def test_every_command_describes_itself_in_its_help(capsys):
         description = out.split("\n\n")[1]
         assert not description.startswith("options:") and len(description.split()) >= 4, (name, out[:300])
         assert "``" not in out, name
+
+
+def test_boundary_takes_one_cg_column_as_one_value(capsys):
+    """Checking one cell's column, a user writes ``--cg 0.3125``: it was refused (only A:B:N)."""
+    import argparse
+    from amra_core.cli.common import value_range
+    parse = value_range("--cg", 0.0, 1.0, True)
+    assert parse("0.3125") == parse("0.3125:0.3125:1") == (0.3125, 0.3125, 1)
+    with pytest.raises(argparse.ArgumentTypeError, match="out of range"):
+        parse("40")
+    with pytest.raises(argparse.ArgumentTypeError, match=r"give A:B:N \(or one value A\)"):
+        parse("0.2:0.4")
+    rc = main(["boundary", "--preset", "paper-boundary", "--fidelity", "rigid", "--mu", "0", "--cg", "0.40",
+               "--coarse", "3", "--tol", "0.2", "--gj", "100:1500", "--workers", "1", "--json", "--quiet"])
+    out, _ = capsys.readouterr()
+    assert rc == 0 and [c["cg"] for c in json.loads(out)["columns"]] == [0.40]
