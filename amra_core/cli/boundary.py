@@ -222,6 +222,12 @@ def cmd_boundary(args) -> int:
               f"{spec.weak_amplitude_deg:g} deg")
         print("fold, flutter and critical GJ are the upper ends of their brackets (the safe side); an interval "
               "ends at the geometric mean of the two GJ values that bracket its edge")
+        # a cell's rotor has EA, CG and GJ uniform along the span: the preset's own (McCutcheon's tapered EA)
+        # is another rotor, and a run of "the same cell" without --ea disagreed with the map
+        rotor_arg = f"--rotor {args.rotor}" if args.rotor is not None else f"--preset {spec.rotor_name()}"
+        print(f"a cell is this rotor with EA {spec.ea:g}, its CG and its GJ uniform along the span; run one with: amra "
+              f"simulate {rotor_arg} --fidelity {spec.fidelity} --aero {spec.aero} --mu {spec.mu:g} --ea {spec.ea:g} "
+              f"--cg CG --gj GJ")
         print(f"{'CG [c]':>8s} {'fold GJ':>9s} {'flutter GJ':>11s} {'critical GJ':>12s} {'bracket':>22s}  status")
 
         def gjs(g):

@@ -387,3 +387,27 @@ def test_boundary_takes_one_cg_column_as_one_value(capsys):
                "--coarse", "3", "--tol", "0.2", "--gj", "100:1500", "--workers", "1", "--json", "--quiet"])
     out, _ = capsys.readouterr()
     assert rc == 0 and [c["cg"] for c in json.loads(out)["columns"]] == [0.40]
+
+
+def test_boundary_names_the_run_of_a_cell_and_that_run_agrees(capsys):
+    """A map of the McCutcheon preset is at the map's uniform EA 0.32; ``amra simulate --preset
+    mccutcheon`` without ``--ea`` runs the blade's tapered EA, another rotor (at CG 31.25 %, GJ 200 it
+    trims at 28.34 rad/s against 27.57). The map's text says how to run one of its cells, and that
+    command, at a cell inside a stable interval and one inside the windmill-brake interval, gives
+    the cell's word."""
+    import shlex
+    rc = main(["boundary", "--preset", "mccutcheon", "--fidelity", "rigid", "--mu", "0", "--cg", "0.40",
+               "--coarse", "3", "--tol", "0.2", "--workers", "1", "--quiet"])
+    out, _ = capsys.readouterr()
+    assert rc == 0
+    line = next(ln for ln in out.splitlines() if ln.startswith("a cell is this rotor with EA 0.32"))
+    command = shlex.split(line.split("run one with: amra ", 1)[1])
+    assert command[:3] == ["simulate", "--preset", "mccutcheon"] and ["--ea", "0.32"] == command[-6:-4]
+    kinds = {ln.split()[0]: ln.split()[1] for ln in out.splitlines() if ln.startswith("          ")}
+    assert set(kinds) >= {"stable", "windmill-brake"}, out
+    for kind, gj, word in (("stable", 2000.0, "stable"), ("windmill-brake", 100.0, "no-autorotation")):
+        lo, hi = (float(x) for x in kinds[kind].split("-"))
+        assert lo < gj < hi, (kind, kinds[kind])
+        argv = [a.replace("CG", "0.4").replace("GJ", f"{gj:g}") for a in command]
+        assert main(argv + ["--t-end", "20", "--json", "--quiet"]) == 0
+        assert json.loads(capsys.readouterr().out)["verdict"] == word, (kind, gj)
