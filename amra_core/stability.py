@@ -287,6 +287,18 @@ def assess_cell(rotor: Rotor, flight: FlightCondition, settings: SolverSettings,
     return cell_from_modes(cg, gj, res.trim, res.modes)
 
 
+def verdict_of_trim(tr: TrimResult, modes: list) -> str:
+    """The word a map's cell uses (:func:`amra_core.boundary.cells_of_walk`) for a trim and its
+    modes: ``no-autorotation`` without a trim or on the windmill-brake root, ``flutter`` or
+    ``divergence`` where a mode grows, ``overspeed`` on the normal branch overspeeding, else
+    ``stable``. ``amra stability`` said only "stable: False" where the map said flutter."""
+    if not tr.ok or tr.branch == "windmill-brake":
+        return "no-autorotation"
+    if modes and not all(m.real_part_per_s < UNSTABLE_REAL_PART for m in modes):
+        return cell_from_modes(float("nan"), float("nan"), tr, modes).verdict
+    return "overspeed" if tr.branch == "overspeed" else "stable"
+
+
 def cell_from_modes(cg: float, gj: float, tr: TrimResult, modes: list) -> CellResult:
     """The cell of a normal-branch trim ``tr`` with its ``modes``."""
     crit = max(modes, key=lambda m: m.real_part_per_s)

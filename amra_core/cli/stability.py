@@ -9,18 +9,23 @@ from .common import flight, flight_args, dumps_strict, load_rotor, rotor_args
 
 def cmd_stability(args):
     from ..model import compile_model
-    from ..stability import analyse
+    from ..stability import analyse, verdict_of_trim
     settings = SolverSettings(fidelity=args.fidelity, aero=args.aero, n_elements=args.elements,
                               rigid_spring=args.rigid_spring)
     rotor, fl = load_rotor(args), flight(args)
     res = analyse(compile_model(rotor, fl, settings))
     out = res.to_dict(include_aero_lag=args.all_modes)
+    out["verdict"] = verdict_of_trim(res.trim, res.modes)  #: a map cell's word for this case
     if not res.trim.ok:
         out["reason"] = res.trim.reason
     if args.json:
         print(dumps_strict(out))
     else:
-        print(f"stable: {out['stable']}  ({out['method']}; trim {res.trim.status})")
+        crit = res.critical
+        why = "" if crit is None else (f"; least damped: {crit.label} {crit.real_part_per_s:+.3g} 1/s at "
+                                       f"{crit.frequency_hz:.3g} Hz")
+        print(f"verdict: {out['verdict']} (a map cell's word{why})")
+        print(f"stable: {out['stable']}  ({out['method']}; trim {res.trim.status}, branch {res.trim.branch})")
         print(f"case: {case_line(rotor, settings.fidelity, fl, res.trim)}")
         if not res.trim.ok:
             print(f"reason: {res.trim.reason}")

@@ -262,6 +262,7 @@ def test_stability_json(capsys, flight):
         assert m["damping_ratio"] == pytest.approx(-m["real_part_per_s"] / w, rel=1e-6, abs=1e-12)
     assert d["stable"] == all(m["real_part_per_s"] < 1e-3 for m in d["modes"])
     assert d["stable"] is True  # nominal McCutcheon blade (model-notes §6)
+    assert d["verdict"] == "stable"  # the word a map cell of this case uses
 
 
 def test_stability_all_modes_adds_aero_lag(capsys):
@@ -276,12 +277,14 @@ def test_stability_no_trim(capsys):
     d = cli_json(capsys, "stability", "--preset", "paper-boundary", "--gj", "100")
     assert d["stable"] is False and d["modes"] == []
     assert d["trim"]["status"] == "no-autorotation" and d["reason"]
+    assert d["verdict"] == "no-autorotation"
 
 
 def test_stability_human_readable(capsys):
     rc, out, err = run_cli(capsys, "stability", "--preset", "mccutcheon")
     assert rc == 0
-    assert out.startswith("stable: True")
+    assert out.startswith("verdict: stable (a map cell's word; least damped: ")
+    assert "\nstable: True  (eigenvalues; trim trimmed, branch normal)" in out
     assert "f [Hz]" in out and "zeta [-]" in out
     # the case it is about: rotor, fidelity, GJ, flight and the trim
     assert "case: mccutcheon, rigid, GJ 1471 N m^2/rad, axial; trim: rotor speed" in out
@@ -289,7 +292,8 @@ def test_stability_human_readable(capsys):
 
 def test_stability_without_a_trim_says_why(capsys):
     rc, out, err = run_cli(capsys, "stability", "--preset", "paper-boundary", "--gj", "100")
-    assert out.startswith("stable: False") and "case: paper-boundary, rigid, GJ 100 N m^2/rad, axial\n" in out
+    assert out.startswith("verdict: no-autorotation (a map cell's word)\nstable: False")
+    assert "case: paper-boundary, rigid, GJ 100 N m^2/rad, axial\n" in out
     assert "reason: no steady autorotation" in out
 
 

@@ -94,3 +94,25 @@ def test_real_negative_multiplier_flutter_agrees_with_the_run():
                    trim_result=tr).run().verdict()
     assert v.verdict == "flutter"
     assert v.frequency_hz == pytest.approx(crit.frequency_hz, rel=0.05)
+
+
+@pytest.mark.parametrize("fidelity,mu,cg", [("rigid", 0.0, 0.40), ("rigid", 0.0, 0.24), ("rigid", 0.1, 0.3125)])
+def test_stability_says_the_word_of_the_map_cell(fidelity, mu, cg):
+    """``amra stability`` answered "stable: False" where a map cell of the same trim said flutter (or
+    no-autorotation, overspeed): :func:`verdict_of_trim` gives the cell's word for every point of a
+    column that has a trim (a fold cell has none: ``amra stability`` then says no-autorotation)."""
+    from amra_core.boundary import cells_of_walk
+    from amra_core.column import walk_column
+    from amra_core.rotor_io import load_preset
+    from amra_core.stability import verdict_of_trim
+    rotor = load_preset("mccutcheon" if mu else "paper-boundary").with_overrides(x_ea=0.32, x_cg=cg)
+    fl = FlightCondition(mu=mu) if mu else FlightCondition()
+    w = walk_column(rotor, fl, SolverSettings(fidelity), cg, 30.0, 3000.0, rel_tol=0.05, n_probe=5)
+    cells = {c.gj_nm2: c for c in cells_of_walk(cg, w.points)}
+    checked = set()
+    for p in w.points:
+        if p.kind in ("fold", "failed") or p.trim is None or not p.trim.ok:
+            continue
+        assert verdict_of_trim(p.trim, p.modes) == cells[p.gj_nm2].verdict, (p.gj_nm2, p.kind)
+        checked.add(cells[p.gj_nm2].verdict)
+    assert "stable" in checked and len(checked) >= 2, checked
