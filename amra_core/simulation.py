@@ -127,11 +127,11 @@ class Simulation:
             else:
                 self.start_note = (("no trim found for these parameters (the branch's last trim is already unstable)"
                                     if be.get("last_trim_unstable") else "no steady autorotation for these parameters")
-                                   + f": started from the end of the trim "
-                                   f"branch (GJ x{be['gj_scale']:.3g}, mean GJ "
-                                   f"{be['gj_mean_nm2']:.0f} N m^2/rad, rotor speed "
-                                   f"{be['omega_rad_s']:.2f} rad/s) with the requested parameters "
-                                   f"switched on at t = 0")
+                                   + f": started from the last trim of the branch followed down in GJ "
+                                   f"(at GJ {be['gj_mean_nm2']:.0f} N m^2/rad span mean, {be['gj_scale']:.3g} times "
+                                   f"this blade's; rotor speed {be['omega_rad_s']:.2f} rad/s) with the requested "
+                                   f"parameters switched on at t = 0")
+                # ("GJ x2.07, mean GJ 415" read as a riddle)
                 # keep the branch-end flight controls (tilt, holds) but the requested structure
                 self.model = _with_controls_of(self.model, tr.model)
         else:  # nothing to start from: a run that never starts, whose verdict is the trim's

@@ -340,3 +340,19 @@ def test_a_run_with_no_branch_to_follow_says_where_it_starts_without_nan():
     assert "nan" not in note.lower()
     assert note.startswith("no steady autorotation even for a 30x stiffer blade: started from the equilibrium")
     assert "mean GJ 300 N m^2/rad" in note and f"rotor speed {sim.trim.omega_rad_s:.2f} rad/s" in note
+
+
+def test_a_run_from_the_branch_end_says_at_which_gj_it_starts_in_words():
+    """Paper-boundary, GJ 200, CG 40 %: no trim, the run starts from the last trim of the branch
+    followed down in GJ. The note said "(GJ x2.07, mean GJ 415 N m^2/rad, ...)", read as a riddle."""
+    from amra_core.flight import FlightCondition, SolverSettings
+    from amra_core.rotor_io import load_preset
+    from amra_core.simulation import Case, Simulation
+    sim = Simulation(Case(load_preset("paper-boundary").with_overrides(gj_nm2=200.0, x_ea=0.32, x_cg=0.40),
+                          FlightCondition(), SolverSettings("rigid"), t_end_s=0.5))
+    be = sim.trim.branch_end
+    assert not sim.trim.ok and be["gj_mean_nm2"] > 200.0
+    assert (f"started from the last trim of the branch followed down in GJ (at GJ {be['gj_mean_nm2']:.0f} N m^2/rad "
+            f"span mean, {be['gj_scale']:.3g} times this blade's; rotor speed {be['omega_rad_s']:.2f} rad/s)") \
+        in sim.start_note
+    assert "GJ x" not in sim.start_note
