@@ -203,8 +203,11 @@ def url(s: dict) -> str:
 def build_command(s: dict, environ: Mapping[str, str], python: str = sys.executable) -> tuple[list, dict]:
     """``(argv, env)`` of the ``panel serve`` process for the settings ``s``."""
     main, setup = APP_DIR / "main.py", APP_DIR / "warmup.py"
+    # 0 means one per core; given to Panel as 0, its --setup (the warm-up that builds the pools) ran
+    # before the fork, in the parent, and the serving processes' Run never started
+    procs = s["num_procs"] or os.cpu_count() or 1
     argv = [python, "-m", "panel", "serve", str(main), "--address", s["address"], "--port", str(s["port"]),
-            "--num-procs", str(s["num_procs"]),
+            "--num-procs", str(procs),
             "--websocket-max-message-size", str(s["max_message_bytes"]), "--log-level", s["log_level"]]
     if s["num_threads"] is not None:
         argv += ["--num-threads", str(s["num_threads"])]

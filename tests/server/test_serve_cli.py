@@ -177,3 +177,19 @@ def test_the_validation_report_is_served_beside_the_app():
     (spec,) = flag_values(argv, "--static-dirs")
     name, folder = spec.split("=", 1)
     assert name == "validation" and (Path(folder) / "report.html").is_file()
+
+
+def test_num_procs_zero_is_one_server_process_per_core(amra_server):
+    """``--num-procs 0`` ("one per core") went to Panel as 0, whose ``--setup`` then ran once, before the
+    fork: the pools were the parent's and no session's Run ever started. Now it is the core count,
+    and each serving process warms up (builds its own pools) after the fork."""
+    import time
+    s = resolve(type("A", (), {"num_procs": "0"})(), {})
+    argv, _ = build_command(s, {})
+    cores = os.cpu_count() or 1
+    assert flag_values(argv, "--num-procs") == [str(cores)]
+    _, srv = amra_server("--num-procs", "0")
+    t_end = time.monotonic() + 180
+    while srv.log_text().count("AMRA warm-up: kernels ready") < cores and time.monotonic() < t_end:
+        time.sleep(0.5)
+    assert srv.log_text().count("AMRA warm-up: kernels ready") == cores, srv.log_text()[-3000:]
