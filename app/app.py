@@ -281,6 +281,8 @@ class Dashboard(pn.viewable.Viewer):
 
     # ------------------------------------------------------------------ parameter changes
     def _on_live(self, *events) -> None:
+        if self.controls.applying_preset:  # a new case, not a change to the running one: a preset's GJ,
+            return  # EA and CG went live into a run of another rotor and flight (_on_case says so)
         if self.session.running:  # only what moved (the card named EA and CG changes nobody made)
             moved = {LIVE_VALUE_OF[e.name] for e in events if e.name in LIVE_VALUE_OF}
             values = {k: v for k, v in self.controls.live_values().items() if k in moved}
@@ -289,7 +291,10 @@ class Dashboard(pn.viewable.Viewer):
                 self.status.note.value = f"applied live at the next chunk: {live_values_text(values, ', ', True)}"
 
     def _on_case(self, *events) -> None:
-        if self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):
+        if self.session.running and self.controls.applying_preset:
+            self.status.note.value = ("the preset's case takes effect at the next run: this run goes on with its "
+                                      "own values")
+        elif self.session.running and any(e.name not in LIVE_PARAMETERS for e in events):
             self.status.note.value = "this change takes effect at the next run (only GJ, EA and CG apply live)"
         self.refresh.kick()
 

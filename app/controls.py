@@ -157,6 +157,11 @@ class Controls(param.Parameterized):
             with param.parameterized.discard_events(self):
                 self.param.update(**{k: v for k, v in params.items() if k != "preset"})
 
+    @property
+    def applying_preset(self) -> bool:
+        """True while a chosen preset sets its values (their watchers run inside)."""
+        return self._applying_preset
+
     @param.depends("preset", watch=True)
     def _apply_preset(self):
         values = PRESETS[self.preset].as_dict()

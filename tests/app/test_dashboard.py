@@ -109,6 +109,24 @@ def test_a_live_gj_change_is_told_as_what_moved(dash, wait):
     assert "decayed from the start" not in dash.status.verdict.explanation
 
 
+def test_a_preset_chosen_mid_run_is_the_next_run_not_a_live_change(dash, wait):
+    """Fig. 10 running, "Table 1 A" chosen: the preset's GJ, EA and CG (1471, 31.4, 33) went live into
+    the paper-boundary run, whose export then described neither case (paper-boundary at the McCutcheon
+    values, airspeed 0)."""
+    dash.controls.preset = "fig10"
+    dash.controls.param.update(run_s=4.0, speed=4.0)
+    dash.start_run()
+    pump_until(dash, lambda: len(dash.live.frame()) and dash.live.frame()["t_s"].iloc[-1] > 0.5,
+               wait, what="0.5 s of run")
+    dash.controls.preset = "table1a"
+    assert dash.controls.gj_nm2 == 1471.0 and dash.controls.rotor == "mccutcheon"
+    assert dash.status.note.value.startswith("the preset's case takes effect at the next run")
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the run's end")
+    assert not dash.session.sim.changes or all("1471" not in what for _, _, what in dash.session.sim.changes)
+    meta = [ln for ln in dash.history_csv().getvalue().splitlines() if ln.startswith("#")]
+    assert "# rotor: paper-boundary" in meta and not any("1471" in ln for ln in meta), meta
+
+
 def test_close_stops_the_worker_and_releases_the_map(dash, wait):
     dash.controls.param.update(run_s=30.0, speed=1.0)
     dash.refresh_analyses()
