@@ -148,9 +148,26 @@ class Session:
         self._inbox.put(event)
         self.delivery.kick()
 
+    def nobody_watches(self) -> bool:
+        """True once the page's browser has gone: its last connection to this served session closed
+        (a closed or crashed tab, a lost network). Bokeh destroys such a session (and so calls
+        :meth:`close`) only after its unused-session lifetime, 15 s and more, while the run went on
+        computing and pushing rows to the closed socket ("Failed sending message ...")."""
+        ctx = self.doc.session_context if self.doc is not None else None
+        served = getattr(ctx, "session", None)  # bokeh's ServerSession, its connection_count public
+        return served is not None and served.connection_count == 0
+
     def deliver(self) -> None:
         """Hand the queued events to their subscribers, in order (event loop); consecutive rows
-        computed with the same GJ go as one batch, and only the latest pose is drawn."""
+        computed with the same GJ go as one batch, and only the latest pose is drawn. With nobody
+        watching (:meth:`nobody_watches`) the run is stopped and its news dropped."""
+        if self.nobody_watches():
+            self._stop.set()
+            while True:
+                try:
+                    self._inbox.get_nowait()
+                except queue.Empty:
+                    return
         rows, pose = [], None
         while True:
             try:

@@ -276,3 +276,35 @@ def test_load_concurrent_sessions_no_errors(tmp_path):
           f"errors {r['errors']}, {r.get('mb_per_session')} MB/session, browsers {r.get('client_cpu_cores')} cores")
     assert r["errors"] == 0 and rc == 0, r["error_samples"]
     assert r["moves"] == 2 * n
+
+
+def test_a_run_stops_when_its_browser_goes(amra_server, chromium_args):
+    """A tab closed (or crashed) mid-run: its run went on computing and pushing rows to the closed
+    socket until Bokeh destroyed the session, 15 s and more later (tab closed at t = 4.15 s, "run 1
+    ended at t = 25.25 s"). It stops at the first delivery with nobody watching."""
+    base, srv = amra_server(env_extra={"AMRA_MAP_WORKERS": "1"})
+
+    async def run_then_vanish():
+        from playwright.async_api import async_playwright
+        async with async_playwright() as p:
+            browser = await p.chromium.launch(**chromium_args)
+            page = await (await browser.new_context()).new_page()
+            await page.add_init_script(load_test._INIT_JS)
+            await page.goto(f"{base}/main?run_s=60&speed=1&{SMALL_MAP}", timeout=120_000)
+            await page.wait_for_selector(".amra-run button", timeout=120_000)
+            t = await page.evaluate("() => performance.now()")
+            await page.click(".amra-run button")
+            assert await page.evaluate(load_test._WAIT_FIRST_JS, [t, 60_000]) > 0, "the run never streamed"
+            await browser.close()  # the browser process ends: the socket drops without a close frame
+        return time.monotonic()
+
+    closed_at = run_async(run_then_vanish())
+    ended = None
+    while ended is None and time.monotonic() < closed_at + 60:
+        ended = re.search(r"run 1 ended at t = ([0-9.]+) s", srv.log_text())
+        time.sleep(0.2)
+    assert ended is not None, srv.log_text()[-3000:]
+    waited_s = time.monotonic() - closed_at
+    # Bokeh's unused-session lifetime (15 s) is the old bound; nobody watching is seen within a delivery
+    assert waited_s < 10.0, f"the run ended {waited_s:.1f} s after its browser went (t = {ended.group(1)} s)"
+    assert float(ended.group(1)) < 30.0
