@@ -196,6 +196,12 @@ class MapJob:
         with self._lock:
             return list(self.cells)
 
+    def for_export(self) -> tuple:
+        """``(cells, finished columns, done)`` read together: a file saved mid-map said "0 cells so
+        far" above a finished column's fold line (the page's copy of the cells lags the job's)."""
+        with self._lock:
+            return list(self.cells), list(self._columns), self.state == "done"
+
     def columns(self) -> list:
         """The finished columns: ``fold_gj``, ``flutter_gj`` (strong flutter only), ``critical_gj`` and
         the ``intervals`` with their ``strength`` (:mod:`amra_core.boundary.intervals`)."""

@@ -257,8 +257,10 @@ class MapView(pn.viewable.Viewer):
 
     def csv(self) -> io.StringIO:
         job = self.job
-        return map_csv(self.cells, job.spec if job is not None else None,
-                       complete=job is not None and job.state == "done", columns=job.columns() if job is not None else ())
+        if job is None:
+            return map_csv([], None, complete=False)
+        cells, columns, done = job.for_export()
+        return map_csv(cells, job.spec, complete=done, columns=columns)
 
     # -- plot
     def figure(self):
