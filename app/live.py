@@ -34,6 +34,12 @@ COLUMNS = tuple(UNITS)
 #: smallest y-axis span per plot [display units]: a steady run looks steady (0.003 rad/s of round-off
 #: on a 34 rad/s rotor speed is not blown up to fill the plot)
 MIN_SPAN = {"omega_rad_s": 2.0, "teeter_deg": 0.5, "twist0_deg": 0.5, "descent_m_s": 2.0}
+#: what an empty plot spans [display units] (time 0-10 s): before a run, or after Reset, each plot
+#: shows its axes, ticks and units over a typical run's range (empty, they were blank boxes, and
+#: every page load logged "could not set initial ranges" for each); the first rows replace it
+EMPTY_FRAME = {"omega_rad_s": (0.0, 40.0), "teeter_deg": (-1.0, 1.0), "twist0_deg": (-1.0, 1.0),
+               "descent_m_s": (0.0, 10.0)}
+EMPTY_FRAME_S = 10.0
 #: (curves, title, colours) per plot
 PLOTS = ((("omega_rad_s",), "Rotor speed", ("#1f77b4",)),
          (("teeter_deg",), "Teeter angle", ("#2ca02c",)),
@@ -60,6 +66,11 @@ def _empty(curves) -> dict:
     return {c: np.zeros(0) for c in ("t_s", *curves, "gj_nm2")}
 
 
+def _frame(curves) -> dict:
+    """The two corners of an empty plot's span (:data:`EMPTY_FRAME`), drawn transparent."""
+    return {"t_s": [0.0, EMPTY_FRAME_S], "y": list(EMPTY_FRAME[curves[0]])}
+
+
 def minmax_indices(t: np.ndarray, ys, n_out: int) -> np.ndarray:
     """Sorted row indices keeping each curve's min and max in about ``n_out / 2`` time bins (all rows
     if there are not more than ``n_out``)."""
@@ -82,6 +93,8 @@ class LivePlots:
         self._chunks: list = []  #: the run's rows in display units (dicts of COLUMNS), joined when read
         self.sources = [ColumnDataSource(_empty(curves)) for curves, _, _ in PLOTS]
         self.sources[0].name = "amra-live-omega"
+        #: per plot, the corners of its span while it has no rows (emptied by the first rows)
+        self.frames = [ColumnDataSource(_frame(curves)) for curves, _, _ in PLOTS]
         #: live and scripted changes: time [s] and what changed, drawn as a vertical line in every plot
         self.markers = ColumnDataSource({"t_s": [], "text": []}, name="amra-live-markers")
         self.zoom: tuple | None = None  #: the visible time range [s] while the user has zoomed
@@ -104,14 +117,18 @@ class LivePlots:
         self._chunks, self.zoom, self._density = [], None, 1.0
         self._counts = [0] * len(PLOTS)
         self.markers.data = {"t_s": [], "text": []}
-        for src, (curves, _, _) in zip(self.sources, PLOTS):
+        for src, frame, (curves, _, _) in zip(self.sources, self.frames, PLOTS):
             src.data = _empty(curves)
+            frame.data = _frame(curves)
 
     def append(self, cols: dict) -> int:
         """Add rows (a dict of :data:`COLUMNS`) and send what the page shows of them; returns rows added."""
         n = len(cols["t_s"])
         if not n:
             return 0
+        if not self._chunks:  # the run's first rows: the plots span them, not the empty frame
+            for frame in self.frames:
+                frame.data = {"t_s": [], "y": []}
         self._chunks.append(cols)
         if self.zoom is not None:
             return n  # the user looks at a range: it stays as it is until reset
@@ -194,7 +211,7 @@ class LivePlots:
         # a zoom reaches the server as one RangesUpdate event
         x_range = DataRange1d(only_visible=True, syncable=False)
         out = []
-        for (curves, title, colours), src in zip(PLOTS, self.sources):
+        for (curves, title, colours), src, frame in zip(PLOTS, self.sources, self.frames):
             fig = figure(title=title, height=NORMAL_HEIGHT, sizing_mode="stretch_width", x_range=x_range,
                          y_range=DataRange1d(only_visible=True, syncable=False, min_interval=MIN_SPAN[curves[0]]),
                          tools="pan,box_zoom,wheel_zoom,reset,save", x_axis_label=label("t_s"),
@@ -205,6 +222,7 @@ class LivePlots:
             for col, colour, name in zip(curves, colours, ("blade 0", "blade 1") if len(curves) == 2 else ("run",)):
                 r = fig.add_glyph(src, Line(x="t_s", y=col, line_width=2, line_color=colour))
                 items.append((name, [r]))
+            fig.add_glyph(frame, Line(x="t_s", y="y", line_alpha=0.0))  # spans the empty plot (EMPTY_FRAME)
             tips = [("t", "@t_s{0.000} s"), (UNITS[curves[0]][0], f"@{curves[0]}{{0.000}} {UNITS[curves[0]][1]}"),
                     ("GJ", "@gj_nm2{0.0} N m²/rad")]
             fig.add_tools(HoverTool(tooltips=tips, mode="vline", renderers=[r]))

@@ -85,3 +85,18 @@ def test_a_burst_of_live_changes_keeps_one_readable_label():
     live.mark(15.15, "EA 30 %")
     assert list(live.markers.data["t_s"]) == [6.85, 11.2, 11.4, 11.6, 11.8, 15.15]
     assert list(live.markers.data["text"]) == ["GJ 300", "", "", "", "CG 44 %", "EA 30 %"]
+
+
+def test_an_empty_plot_spans_a_typical_run_until_its_first_rows():
+    """Before a run (and after Reset) the plots were blank boxes without axes, and each page load
+    logged "could not set initial ranges" for them: a transparent frame spans time 0-10 s and a
+    typical range of each quantity until the first rows come, and again after a clear."""
+    from app.live import EMPTY_FRAME, PLOTS
+    lp = LivePlots()
+    lp.figures()
+    for frame, (curves, _, _) in zip(lp.frames, PLOTS):
+        assert list(frame.data["t_s"]) == [0.0, 10.0] and tuple(frame.data["y"]) == EMPTY_FRAME[curves[0]]
+    lp.append(columns_from_rows(np.zeros((5, len(HISTORY_COLUMNS))), 1500.0))
+    assert all(len(frame.data["t_s"]) == 0 for frame in lp.frames)
+    lp.clear()
+    assert all(list(frame.data["t_s"]) == [0.0, 10.0] for frame in lp.frames)

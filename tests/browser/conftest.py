@@ -133,7 +133,9 @@ def watched_page(page):
     page.set_default_timeout(120_000)
     page.amra_errors = []
     page.amra_outside = []
+    page.amra_range_warnings = []  # Bokeh's "could not set initial ranges": a plot drawn with no span
     page.on("console", lambda m: m.type == "error" and page.amra_errors.append(m.text))
+    page.on("console", lambda m: "could not set initial ranges" in m.text and page.amra_range_warnings.append(m.text))
     page.on("pageerror", lambda e: page.amra_errors.append(str(e)))
 
     def on_request(req):
