@@ -271,7 +271,11 @@ def apply_query(controls: Controls, query: dict) -> list:
     """Apply a link's values (raw strings, or values parsed as ``Location.query_params`` parses them),
     the preset first so explicit values win, each validated as a widget's is; return a message for
     each one rejected (the control keeps its value)."""
-    errors = []
+    # a key the page does not know was dropped without a word (?ea_pct=30 opened at EA 32); the
+    # server's own (bokeh-...) and Panel's template theme are not the link's
+    errors = [f"link parameter {key} = {query[key]!r} was ignored: not a parameter of this page (its "
+              f"parameters: {', '.join(URL_KEYS.values())})"
+              for key in sorted(query) if key not in _BY_KEY and not key.startswith("bokeh-") and key != "theme"]
     for key in sorted((k for k in query if k in _BY_KEY), key=lambda k: k != "preset"):
         name, raw = _BY_KEY[key], query[key]
         p = controls.param[name]

@@ -44,9 +44,13 @@ def test_bad_values_are_reported_by_name_and_ignored():
     msgs = apply_query(b, {"gj": 1e9, "cg": "abc", "mu": float("nan"), "fidelity": "beam", "map_columns": 2.5,
                            "rotor": "uploaded file", "ea": 30.0, "unknown": 1})
     joined = "\n".join(msgs)
-    assert len(msgs) == 6
-    for key in ("gj", "cg", "mu", "fidelity", "map_columns", "rotor"):
+    assert len(msgs) == 7
+    for key in ("gj", "cg", "mu", "fidelity", "map_columns", "rotor", "unknown"):
         assert f"link parameter {key} =" in joined
+    # a key the page does not know is named too (?ea_pct=30 opened at EA 32 without a word)
+    assert "link parameter unknown = 1 was ignored: not a parameter of this page (its parameters: preset, rotor, gj," \
+        in joined
+    assert apply_query(Controls(), {"bokeh-session-id": "x", "theme": "dark"}) == []  # the server's and Panel's
     assert "allowed 10 to 10000" in joined and "rigid, fem-torsion, fem-coupled" in joined
     assert b.ea_pct == 30.0  # the good one is applied
     assert b.gj_nm2 == 1500.0 and b.cg_pct == 40.0 and b.mu == 0.0 and math.isfinite(b.mu)
