@@ -218,12 +218,19 @@ def test_krylov_floquet_matches_the_full_monodromy(paper, fidelity, cg, gj):
     assert tr.ok
     y0 = tr.state
     dt = stable_time_step(tr.model, 1.3 * y0[Y_OMEGA])
+    import scipy.linalg as sla
     z, _, _, revs, n_res, converged = floquet_krylov(tr.model, y0, dt)
-    full = np.linalg.eigvals(monodromy(tr.model, y0, dt)[0])
-    full = full[np.argsort(-np.abs(full))]
+    full, left, right = sla.eig(monodromy(tr.model, y0, dt)[0], left=True, right=True)
     assert converged and n_res >= 12
     for zk in z[:n_res]:
-        assert np.min(np.abs(full - zk)) < 1e-4 * max(1.0, abs(zk))
+        i = np.argmin(np.abs(full - zk))
+        # first-order perturbation: two difference matrices of the same marches differ by about 1e-5
+        # (relative, along other directions), and an eigenvalue moves by that times its condition
+        # number; the damped pairs of fem-coupled CG 0.36 (|z| 0.21-0.28) have 110-170, and one of
+        # them (|z| 0.209, kappa 119) moved 2.3e-4 on an AVX-512 machine, both from the forward and
+        # from the central full matrix (which agree with each other to 1e-6 there)
+        kappa = np.linalg.norm(left[:, i]) * np.linalg.norm(right[:, i]) / abs(left[:, i].conj() @ right[:, i])
+        assert abs(full[i] - zk) < max(1e-4, 1e-5 * kappa) * max(1.0, abs(zk)), (zk, full[i], kappa)
     assert revs <= 0.6 * len(y0)
 
     kry, cen = analyse(m, tr, "krylov"), analyse(m, tr, "central")
@@ -232,7 +239,14 @@ def test_krylov_floquet_matches_the_full_monodromy(paper, fidelity, cg, gj):
         return np.array(sorted(md.real_part_per_s for md in r.modes if md.label != "aero lag")[-4:])
     a, b = least_damped(kry), least_damped(cen)
     print(f"{fidelity} CG {cg} GJ {gj}: {revs} revolutions (full {len(y0)}); least damped {a} vs central {b}")
-    assert np.all(np.abs(a - b) <= np.maximum(2e-4, 5e-5 * np.abs(b)))
+    # an exponent s = log(z) / T moves by dz / (|z| T): for an ill-conditioned multiplier, by the bound
+    # above (fem-coupled CG 0.36: -6.5325 against -6.5331 1/s, |z| 0.22, kappa ~120)
+    T = 2 * np.pi / y0[Y_OMEGA]
+    for ak, bk in zip(a, b):
+        zb = np.exp(bk * T)
+        i = np.argmin(np.abs(np.abs(full) - zb))
+        kappa = np.linalg.norm(left[:, i]) * np.linalg.norm(right[:, i]) / abs(left[:, i].conj() @ right[:, i])
+        assert abs(ak - bk) <= max(2e-4, 5e-5 * abs(bk), 1e-5 * kappa / T), (ak, bk, kappa)
     assert kry.stable == cen.stable
     again = analyse(m, tr, "krylov")
     assert [md.real_part_per_s for md in again.modes] == [md.real_part_per_s for md in kry.modes]
