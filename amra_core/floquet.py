@@ -5,6 +5,7 @@ forming it. Below :mod:`amra_core.stability` (which turns them into modes and ve
 from __future__ import annotations
 
 import math
+from typing import Optional
 
 import numpy as np
 
@@ -20,21 +21,58 @@ FD_STEP_FORWARD = 3e-6
 FD_STEP_CENTRAL = 1e-6
 
 
+#: states kept per revolution of every marched revolution, to read each Floquet mode's harmonics
+HARMONIC_SAMPLES = 64
+#: a Floquet exponent is unfolded to its dominant harmonic among |h| <= this (h times the rotor speed)
+MAX_HARMONIC = 12
+
+
 def _one_revolution(model: CompiledModel, y0: np.ndarray, dt: float):
-    """``(march, T)``: ``march(y)`` advances ``y`` in place by one revolution ``T`` [s] of the rotor
-    speed of ``y0``, in whole steps of at most ``dt`` (at least 32), and returns it."""
+    """``(march, T, times)``: ``march(y, out=None)`` advances ``y`` in place by one revolution ``T``
+    [s] of the rotor speed of ``y0``, in whole steps of at most ``dt`` (at least 32), and returns it;
+    with ``out`` (``len(times)`` rows) it also writes the state without psi at ``times`` [s] along
+    the way (about :data:`HARMONIC_SAMPLES`, the first at 0)."""
     steps = max(int(round(2 * math.pi / y0[Y_OMEGA] / dt)), 32)
     T = 2 * math.pi / y0[Y_OMEGA]
-    hist = np.zeros((1, kernels.N_HIST)); st = np.zeros((1, len(y0)))
+    every = max(1, steps // HARMONIC_SAMPLES)
+    n_rec = (steps + every - 1) // every  # the kernel writes a row every `every` steps, from step 0
+    times = np.arange(n_rec) * every * (T / steps)
+    hist = np.zeros((n_rec, kernels.N_HIST)); st = np.zeros((n_rec, len(y0)))
 
-    def march(y: np.ndarray) -> np.ndarray:
-        kernel_guard.advance(y, 0.0, T / steps, steps, 10**9, model.arrays, hist, st, -1.0)
+    def march(y: np.ndarray, out=None) -> np.ndarray:
+        kernel_guard.advance(y, 0.0, T / steps, steps, every, model.arrays, hist, st, -1.0)
+        if out is not None:
+            out[:] = st[:, 1:]
         return y
-    return march, T
+    return march, T, times
 
 
-def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "forward"):
-    """One-revolution state transition (without psi); returns (Phi, T).
+def harmonics(lam: np.ndarray, paths: np.ndarray, times: np.ndarray, T: float, omega: float):
+    """``(h, C)``: the Fourier coefficients ``C[k, :, j]`` of harmonic ``h[k]`` (``|h| <=``
+    :data:`MAX_HARMONIC`) of the periodic part of Floquet mode ``j``. A mode's linearised motion is
+    ``exp(lam t) P(t)`` with ``P`` of period ``T`` (``lam`` principal, ``log(z) / T``), so
+    ``P(t) = sum_h C_h exp(i h Omega t)`` and the mode moves at the frequencies ``Im(lam) + h Omega``
+    at once: which one is "its" frequency is read from ``C`` (:func:`amra_core.stability.analyse`,
+    after Bauchau & Nikishkov 2001, J. Am. Helicopter Soc. 46(3)).
+
+    ``paths`` (``len(times)``, states, exponents): each exponent's eigenvector marched over one
+    revolution (the linearised motion, from the monodromy's marches) at ``times`` [s] in [0, T)."""
+    P = paths * np.exp(-np.outer(times, lam))[:, None, :]
+    # trapezoids over [0, T], closed by the periodicity P(T) = P(0)
+    w = 0.5 * np.diff(np.append(times, T))
+    w[1:] += 0.5 * np.diff(times)
+    w[0] += 0.5 * (T - times[-1])
+    h = np.arange(-MAX_HARMONIC, MAX_HARMONIC + 1)
+    E = np.exp(-1j * omega * np.outer(h, times)) * (w / T)[None, :]
+    return h, np.einsum("ht,tnm->hnm", E, P)
+
+
+def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "forward",
+              observe: Optional[np.ndarray] = None):
+    """One-revolution state transition (without psi); returns (Phi, T), with ``observe`` (signals:
+    rows on the state without psi) also those signals of ``Phi(t_k, 0)`` at the ``times`` t_k of
+    :func:`_one_revolution` (``(len(times), signals, n)``) and the times: ``(Phi, T, paths, times)``,
+    for :func:`harmonics`.
 
     ``scheme='forward'`` (default): one-sided differences against one unperturbed march (n + 1
     marches of one revolution, relative step 3e-6: the best balance of truncation and round-off
@@ -47,21 +85,29 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "fo
     ``'central'``: central differences (2 n marches)."""
     if scheme not in ("forward", "central"):
         raise ValueError(f"scheme = {scheme!r} is not allowed: choose 'forward' or 'central'")
-    march, T = _one_revolution(model, y0, dt)
+    march, T, times = _one_revolution(model, y0, dt)
     n = len(y0)
     Phi = np.zeros((n - 1, n - 1))
+    paths = None if observe is None else np.zeros((len(times), len(observe), n - 1))  # G Phi(t_k, 0), by columns
+    a, b = np.zeros((len(times), n - 1)), np.zeros((len(times), n - 1))
     if scheme == "forward":
-        yb = march(y0.copy())
+        yb = march(y0.copy(), b)
     for i in range(1, n):
         h = (FD_STEP_FORWARD if scheme == "forward" else FD_STEP_CENTRAL) * max(1.0, abs(y0[i]))
         yp = y0.copy(); yp[i] += h
-        march(yp)
+        march(yp, a)
         if scheme == "forward":
             Phi[:, i - 1] = (yp[1:] - yb[1:]) / h
+            if paths is not None:
+                paths[:, :, i - 1] = (a - b) @ observe.T / h
         else:
             ym = y0.copy(); ym[i] -= h
-            march(ym)
+            march(ym, b)
             Phi[:, i - 1] = (yp[1:] - ym[1:]) / (2 * h)
+            if paths is not None:
+                paths[:, :, i - 1] = (a - b) @ observe.T / (2 * h)
+    if paths is not None:
+        return Phi, T, paths, times
     return Phi, T
 
 
@@ -73,7 +119,8 @@ KRYLOV_MAX_DIM = 64
 KRYLOV_TOL = 1e-8
 
 
-def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int = KRYLOV_MODES):
+def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int = KRYLOV_MODES,
+                   observe: Optional[np.ndarray] = None):
     """The ``n_modes`` largest Floquet multipliers (the least damped modes; a complex pair counts
     twice) and their eigenvectors by Arnoldi on the monodromy matrix, which is never formed: each
     Krylov vector costs one perturbed revolution, the one-sided difference of :func:`monodromy`
@@ -89,11 +136,16 @@ def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int
     (descending; the first ``n_resolved`` are the resolved multipliers, the rest are rough
     estimates of the remaining spectrum), their vectors (columns, state without psi), the period
     [s], the revolutions marched, and whether the resolved ones met :data:`KRYLOV_TOL` within
-    :data:`KRYLOV_MAX_DIM` vectors (:func:`analyse` forms the full matrix when they did not)."""
-    march, T = _one_revolution(model, y0, dt)
+    :data:`KRYLOV_MAX_DIM` vectors (:func:`analyse` forms the full matrix when they did not).
+    ``observe`` (signals: rows on the state without psi): also those signals of each Ritz vector's
+    linearised motion over the revolution, at the ``times`` of :func:`_one_revolution`
+    (``(len(times), signals, Ritz values)``), for :func:`harmonics`: ``(..., converged, paths, times)``."""
+    march, T, times = _one_revolution(model, y0, dt)
     n = len(y0) - 1
     scale = np.maximum(1.0, np.abs(y0[1:]))
-    base = march(y0.copy())[1:]
+    b, a = np.zeros((len(times), n)), np.zeros((len(times), n))
+    base = march(y0.copy(), b)[1:]
+    W = None if observe is None else np.zeros((len(times), len(observe), min(n, KRYLOV_MAX_DIM)))  # G Phi(t) D Q_j
     m_max = min(n, KRYLOV_MAX_DIM)
     Q = np.zeros((n, m_max + 1)); H = np.zeros((m_max + 1, m_max))
     q = np.random.default_rng(20261206).standard_normal(n)
@@ -101,7 +153,9 @@ def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int
     revs = 1
     for j in range(m_max):
         y = y0.copy(); y[1:] += FD_STEP_FORWARD * scale * Q[:, j]
-        w = (march(y)[1:] - base) / FD_STEP_FORWARD / scale
+        w = (march(y, a)[1:] - base) / FD_STEP_FORWARD / scale
+        if W is not None:  # the physical motion along D Q_j (the Ritz vectors' D Q s are physical too)
+            W[:, :, j] = (a - b) @ observe.T / FD_STEP_FORWARD
         revs += 1
         for _ in range(2):  # classical Gram-Schmidt, twice: orthogonal to round-off
             c = Q[:, :j + 1].T @ w
@@ -119,7 +173,10 @@ def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int
             if converged or j + 1 == m_max:
                 break
     order = np.argsort(-np.abs(th), kind="stable")  # the resolved ones (keep) first, then the rest
-    return th[order], scale[:, None] * (Q[:, :j + 1] @ S[:, order]), T, revs, len(keep), converged
+    out = (th[order], scale[:, None] * (Q[:, :j + 1] @ S[:, order]), T, revs, len(keep), converged)
+    if W is not None:
+        return (*out, W[:, :, :j + 1] @ S[:, order], times)
+    return out
 
 
 def _largest(values: np.ndarray, k: int) -> np.ndarray:

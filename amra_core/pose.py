@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kernel_guard
-from .model import S_C, S_R, S_XEA, Y_OMEGA, Y_PSI, CompiledModel, stable_time_step
+from .model import S_C, S_R, S_XEA, Y_PSI, CompiledModel
 
 
 @dataclass(frozen=True)
@@ -71,17 +71,15 @@ class ModeAnimation:
 
 def _eigenpairs(model: CompiledModel, y0: np.ndarray):
     """(exponents, vectors without psi) of the linearisation about ``y0``: Jacobian eigenvalues in axial
-    flight, Floquet exponents of the monodromy in forward flight, unfolded as the modes table's
-    (:func:`amra_core.stability.unfold_floquet`): matched against their principal values, a pick of
+    flight, Floquet exponents in forward flight at their modes' own frequencies, as the modes table's
+    (:func:`amra_core.stability.floquet_modes`): matched against their principal values, a pick of
     the table's 24.6 Hz unstable mode (mu 0.3) animated a damped 2.77 Hz one."""
     from .blade_symmetry import eig_axial
-    from .stability import averaged_jacobian, jacobian, monodromy, unfold_floquet  # the modes table's own
+    from .stability import floquet_modes, jacobian  # the modes table's own
     if model.flight.is_axial:
         return eig_axial(model, jacobian(model, y0))
-    omega = float(y0[Y_OMEGA])
-    phi, period = monodromy(model, y0, stable_time_step(model, 1.3 * omega))
-    z, vecs = np.linalg.eig(phi)
-    return unfold_floquet(np.log(z.astype(complex)) / period, averaged_jacobian(model, y0, period), omega), vecs
+    lam, vecs, _ = floquet_modes(model, y0)
+    return lam, vecs
 
 
 def mode_animation(model: CompiledModel, y0: np.ndarray, real_part_per_s: float, frequency_hz: float,

@@ -63,8 +63,12 @@ def help_markdown(controls=None) -> str:
         "The growth rate is fitted to the envelope of the motion *since the last change*. A case whose "
         "rotor speed collapses (fold, divergence) can have a decaying oscillation on top of the collapse, "
         "so its oscillation's growth rate is negative while the rotor is lost: read the verdict and the "
-        "collapse time, not the sign alone. Likewise in forward flight a Floquet exponent's frequency is "
-        "only defined modulo the rotor frequency.",
+        "collapse time, not the sign alone.",
+        "### Frequencies in forward flight",
+        "A forward-flight mode moves at its frequency plus and minus whole multiples of the rotor's at "
+        "once (the blades meet a different airspeed each revolution). The map and the Modes tab give each "
+        "mode the frequency at which its named motion (the blades' twist for a torsion mode) is largest "
+        "over a revolution: the one a run of the case shows most.",
         "### Two growth rates",
         "The map and the Modes tab give the **eigenvalue's** growth rate: how fast a small disturbance of "
         "the trimmed state grows at first. The run's card gives the **run's fit**: the envelope of the "
