@@ -67,6 +67,10 @@ class StabilityResult:
         return {"stable": self.stable, "method": self.method, "trim": self.trim.to_dict(), "modes": modes}
 
 
+#: the groups of the blades' own motion (the others: the equilibrium's rotor speed, descent, inflow)
+BLADE_GROUPS = ("lag", "teeter", "flap", "torsion")
+
+
 def _signal_rows(model: CompiledModel, omega: float) -> dict:
     """Per physical group, its signals as rows of a matrix on the state without psi, sized as
     :func:`_participation_all` sizes them (speeds by the tip speed, flap and twist per blade,
@@ -109,12 +113,14 @@ def _floquet_identities(rows: dict, lam: np.ndarray, paths: np.ndarray, times: n
 
     A mode of the periodic system moves at ``Im(lam) + h Omega`` for every ``h`` at once
     (:func:`amra_core.floquet.harmonics`); the group that carries most of the motion over the
-    revolution names the mode, and that group's strongest harmonic gives its frequency (Bauchau &
-    Nikishkov 2001). The motion at the orbit's start alone named a rotor-speed mode "torsion", and
+    revolution names the mode, and the strongest harmonic of the group that moves most gives its
+    frequency (Bauchau & Nikishkov 2001): of the blade's groups if they carry half the motion or more,
+    else of the equilibrium's. The motion at the orbit's start alone named a rotor-speed mode "torsion", and
     the unfolding by the nearest eigenvalue of the averaged Jacobian (its match decided by the
     real parts, the shift being free) put the flutter pair of a fem-coupled blade at mu 0.1 at
     54.45 Hz where a run shows 6.5 Hz. A multiplier under 1e-8 (decayed to round-off within the
-    revolution: its path is noise) keeps its principal value and no participation (None).
+    revolution: its path is noise) or a positive real one (a real mode) keeps its principal value and
+    no participation (None: the vector's own).
 
     ``rows``: :func:`_signal_rows`; ``paths`` (``len(times)``, signals, exponents): those signals, in
     that order, along each exponent's eigenvector marched over the revolution (the linearised motion
@@ -126,10 +132,18 @@ def _floquet_identities(rows: dict, lam: np.ndarray, paths: np.ndarray, times: n
     rms = np.array([np.sqrt(energy[g].sum(axis=0)) for g in names])  # (groups, exponents)
     out, parts = lam.copy(), []
     for j in range(len(lam)):
-        if not abs(np.exp(lam[j] * T)) >= 1e-8 or not rms[:, j].sum() > 0:
+        # a positive real multiplier: a real mode (its harmonics come in +-h pairs), left real (an
+        # aero-lag state put at 23.6 Hz read "torsion"); a negative one moves at (h + 1/2) Omega
+        real = abs(lam[j].imag) * T < 1e-9
+        if real or not abs(np.exp(lam[j] * T)) >= 1e-8 or not rms[:, j].sum() > 0:
             parts.append(None)
             continue
-        top = names[int(np.argmax(rms[:, j]))]
+        # the frequency of the blade's motion if the blade carries at least half the mode, else of the
+        # equilibrium's (the heavily damped 1/rev teeter mode at mu 0.1, inflow 0.36 and teeter 0.20,
+        # was put at the inflow's 0.9 Hz)
+        blade = [i for i, g in enumerate(names) if g in BLADE_GROUPS]
+        own = blade if rms[blade, j].sum() >= 0.5 * rms[:, j].sum() else [i for i in range(len(names)) if i not in blade]
+        top = names[max(own, key=lambda i: rms[i, j])]
         out[j] = lam[j] + 1j * omega * h[int(np.argmax(energy[top][:, j]))]
         parts.append({g: float(rms[i, j] / rms[:, j].sum()) for i, g in enumerate(names)})
     return out, parts
