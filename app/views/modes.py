@@ -100,8 +100,12 @@ class ModesView(pn.viewable.Viewer):
             self.animation.info.object = "Pick a mode to watch its shape."
         for m in modes:
             if m.label != "aero lag":
-                options[f"{m.label}, {m.frequency_hz:.3g} Hz, σ {m.real_part_per_s:+.3g} 1/s"] = (
-                    m.real_part_per_s, m.frequency_hz, m.label)
+                key = f"{m.label}, {m.frequency_hz:.3g} Hz, σ {m.real_part_per_s:+.3g} 1/s"
+                digits = 4
+                while key in options and digits < 12:  # two close rows were one option: one could not be picked
+                    key = f"{m.label}, {m.frequency_hz:.{digits}g} Hz, σ {m.real_part_per_s:+.{digits}g} 1/s"
+                    digits += 1
+                options[key] = (m.real_part_per_s, m.frequency_hz, m.label)
         self.pick.options = options
 
     def _picked(self, event) -> None:

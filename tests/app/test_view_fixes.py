@@ -253,3 +253,15 @@ def test_the_help_gives_the_windmill_brake_threshold_the_solver_uses():
     assert "4-5 times" not in text
     assert f"faster than {equilibrium.WINDMILL_BRAKE_RATIO:g} times the hover induced velocity" in text
     assert equilibrium.WINDMILL_BRAKE_RATIO == 2.0 and 2.0 <= verdict.WINDMILL_BRAKE_RATIO <= 2.1
+
+
+def test_two_close_modes_are_two_choices():
+    """Fem-coupled GJ 1500, mu 0.1: torsion 28.954 Hz, -17.71 1/s and 28.957 Hz, -17.73 1/s were one option
+    ("torsion, 29 Hz, σ -17.7 1/s"): 28 rows in the table, 27 choices, one mode that could not be picked."""
+    from amra_core.stability import Mode
+    from app.views.modes import ModesView
+    view = ModesView(SimpleNamespace(subscribe=lambda *a, **k: None))
+    view.show_modes({"modes": [Mode("torsion", 28.954, 0.1, -17.71), Mode("torsion", 28.957, 0.1, -17.73)],
+                     "text": "Modes of the trim"})
+    picks = [v for v in view.pick.options.values() if v is not None]
+    assert picks == [(-17.71, 28.954, "torsion"), (-17.73, 28.957, "torsion")]
