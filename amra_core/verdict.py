@@ -199,6 +199,16 @@ def _envelope_series(t, e, window):
     return np.array(tc), np.log(np.array(ec))
 
 
+def _last_third_slope(t, e, window) -> float:
+    """Slope [1/s] of the log envelope of ``e`` over the run's last third (inf when too short to say)."""
+    ser = _envelope_series(t, e, window)
+    if ser is None or len(ser[0]) < 9:
+        return math.inf
+    tc, ec = ser
+    last = slice(2 * len(tc) // 3, len(tc))
+    return float(np.polyfit(tc[last], ec[last], 1)[0])
+
+
 def _sustained(t, e, window, amp_start) -> bool:
     """True if the envelope of ``e`` over the last third of the run neither decays (slope above
     SUSTAINED_SLOPE_PER_S) nor has fallen below SUSTAINED_FRACTION of its start: a bounded oscillation."""
@@ -544,6 +554,13 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
         outcome = "runaway"
         if growth <= GROWTH_THRESHOLD_PER_S:
             why = "saturated into a limit cycle 20x larger than the perturbation"
+            outcome = "bounded-oscillation"
+        elif oscill and amp_end is not None and amp_end > BOUNDED_MIN_AMPLITUDE and \
+                _last_third_slope(t[:end], e[:end], window) <= GROWTH_THRESHOLD_PER_S:
+            # the fit over the last two thirds still spans the growth, the last third is flat: rigid
+            # paper-boundary CG 27.5 % GJ 500 ran 10 s "runaway, 0.093 1/s", its envelope flat from 5 s
+            why = (f"grew, then saturated into a limit cycle {amp_end:.3g} x the perturbation (its envelope flat "
+                   f"over the run's last third)")
             outcome = "bounded-oscillation"
         v = Verdict(kind, growth, freq, collapse, amp_end, why, outcome)
         if outcome == "bounded-oscillation":

@@ -144,3 +144,17 @@ def test_a_limit_cycle_is_flutter_whatever_the_run_length(t_end_s):
         res = analyse(sim.model, sim.trim)
         assert not res.stable and res.critical.real_part_per_s > 0.5
         assert res.critical.frequency_hz == pytest.approx(6.3, abs=0.1)
+
+
+def test_a_kick_that_grew_and_saturated_is_a_limit_cycle_not_a_runaway():
+    """Rigid paper-boundary, EA 32 %, CG 27.5 %, GJ 500, axial: the kick grows into a limit cycle 34 x its size
+    (teeter +/-14 deg) by 5 s. A 10 s run said "flutter, growing oscillation, still growing (runaway)": its
+    envelope fit over the last two thirds (+0.093 1/s) spans the growth; the last third is flat. A 20 s run said
+    bounded oscillation already."""
+    rotor = _rotor(0.275, 500.0)
+    for t_end_s in (10.0, 20.0):
+        sim = Simulation(Case(rotor, FlightCondition(), SolverSettings("rigid"), t_end_s=t_end_s))
+        sim.run()
+        v = sim.verdict()
+        assert (v.verdict, v.outcome) == ("flutter", "bounded-oscillation"), (t_end_s, v.explanation)
+        assert v.amplitude > 20.0 and v.limit_cycle["teeter_deg"] > 5.0
