@@ -35,7 +35,7 @@ from .views.map import MapView, map_csv
 from .views.modes import ModesView
 from .views.rotor import LiveRotor
 from .views.sensitivity import SensitivityView
-from .views.status import StatusView, run_html, units_as_shown
+from .views.status import TRIMMING_WORDS, StatusView, run_html, units_as_shown
 
 TITLE = "AMRA — aeroelastic model of a rotor in autorotation"
 CASE_PARAMETERS = ("rotor", "gj_nm2", "ea_pct", "cg_pct", "mu", "airspeed_m_s", "omega_hold_rad_s", "fidelity",
@@ -181,6 +181,7 @@ class Dashboard(pn.viewable.Viewer):
             self.notify("this run uses the values kept, not the ones refused: " + "; ".join(self.refused.values()),
                         "warning")
         self.status.case = case_label(self.controls, scenario)
+        self.status.pending(TRIMMING_WORDS)
         self.status.gj_nm2 = float(np.mean(scenario.case.rotor.stations.gj_nm2))  # the softening moves it
         self.status.run.value = run_html("starting ...")
         self.session.start(scenario.case, self.controls.speed, scenario.changes)
@@ -191,6 +192,11 @@ class Dashboard(pn.viewable.Viewer):
 
     def _finished(self, ev) -> None:
         self.last_history = ev.history
+        # a note about changes to the running run ("applied live at the next chunk: EA 34.5 %", "the preset's
+        # case takes effect at the next run") is stale once it ended (the card's case line keeps its changes);
+        # a scripted softening's stays, it tells the paper's story
+        if self.status.note.value.startswith(("applied live", "the preset's case", "this change takes effect")):
+            self.status.note.value = ""
         ref = PRESETS[self._run_preset].teeter_reference_rad
         if ref is not None and len(ev.history):
             beta = teeter_amplitude_rad(ev.history)

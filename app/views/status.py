@@ -55,12 +55,15 @@ OUTCOME_WORDS = {"runaway": "still growing or leaving its start at the end of th
                  "rotor-speed-collapse": "rotor speed collapse"}
 
 
-def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", case: str = "") -> str:
-    """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet) of the run
-    of ``case`` (a one-line description)."""
+def verdict_html(verdict, final: bool, status: str = "", start_note: str = "", case: str = "",
+                 pending: str = "") -> str:
+    """HTML of the card for an :class:`amra_core.verdict.Verdict` (``None``: no run yet, or, with
+    ``pending``, a run started whose first verdict is still to come: those words) of the run of
+    ``case`` (a one-line description)."""
     if verdict is None:
+        words = html.escape(pending) if pending else "no run yet. Press <i>Run</i>."
         return ("<div class='amra-verdict' data-verdict='none' style='padding:8px;border-radius:6px;"
-                "background:#eceff1'><b>Verdict:</b> no run yet. Press <i>Run</i>.</div>")
+                f"background:#eceff1'><b>Verdict:</b> {words}</div>")
     colour = COLOURS.get(verdict.verdict, "#37474f")
     state = "final" if final else "so far"
     outcome = getattr(verdict, "outcome", "") or ""
@@ -117,6 +120,11 @@ def text(html_text: str = "", css_class: str = "", **kw) -> pn.widgets.StaticTex
     return pn.widgets.StaticText(value=html_text, css_classes=[css_class] if css_class else [], **kw)
 
 
+#: the card's words between Run and a run's first verdict
+TRIMMING_WORDS = "the run is starting: finding its trimmed autorotation ..."
+RUNNING_WORDS = "the run has started: its first verdict comes after about a second of it."
+
+
 class StatusView(pn.viewable.Viewer):
     """Verdict card, run status and live-change note of one session."""
 
@@ -140,7 +148,7 @@ class StatusView(pn.viewable.Viewer):
     def _started(self, ev: Started) -> None:
         self.case_at_start = self.case
         self.live_changes = []
-        self.show(None, False)
+        self.pending(RUNNING_WORDS)
         if ev.start_note.startswith("no steady"):
             self.notify(f"no trim exists for this case: {ev.start_note}", "warning")
 
@@ -160,6 +168,13 @@ class StatusView(pn.viewable.Viewer):
         self.badge.value = badge_html(verdict, final, self.gj_nm2)
         if final and status == "numerical-failure":
             self.notify(f"the run failed numerically: {verdict.explanation}")
+
+    def pending(self, words: str) -> None:
+        """A run started, its first verdict to come: the card says so (it read "no run yet. Press Run."
+        beside "Run: running, t = 0.44 s", or kept the last case's "stable (final)")."""
+        self.verdict, self.final, self.solver_status = None, False, ""
+        self.card.value = verdict_html(None, False, pending=words)
+        self.badge.value = "<span style='color:#eceff1;font-size:20px'>running ...</span>"
 
     def reset(self) -> None:
         self.show(None, False)

@@ -127,6 +127,23 @@ def test_a_preset_chosen_mid_run_is_the_next_run_not_a_live_change(dash, wait):
     assert "# rotor: paper-boundary" in meta and not any("1471" in ln for ln in meta), meta
 
 
+def test_the_card_says_a_run_is_starting_until_its_first_verdict(dash, wait):
+    """About a second after Run the card read "no run yet. Press Run." beside "Run: running, t = 0.44 s"
+    (and after a preset change it kept the last case's "stable (final)"); a note about the running run
+    stayed after it ended."""
+    from app.views.status import RUNNING_WORDS, TRIMMING_WORDS
+    dash.controls.param.update(run_s=3.0, speed=4.0)
+    dash.start_run()
+    assert TRIMMING_WORDS in dash.status.card.value and "no run yet" not in dash.status.card.value
+    assert "running" in dash.status.badge.value
+    pump_until(dash, lambda: RUNNING_WORDS in dash.status.card.value or dash.status.verdict is not None, wait,
+               what="the run's start")
+    dash.controls.gj_nm2 = 1400.0
+    assert dash.status.note.value.startswith("applied live")
+    pump_until(dash, lambda: dash.last_history is not None, wait, what="the run's end")
+    assert dash.status.verdict is not None and dash.status.note.value == ""
+
+
 def test_close_stops_the_worker_and_releases_the_map(dash, wait):
     dash.controls.param.update(run_s=30.0, speed=1.0)
     dash.refresh_analyses()
