@@ -646,6 +646,18 @@ def judge_after_change(history: np.ndarray, columns, change_row: int, change: st
         scale = perturbation_scale
         about = "" if trimmed else "no steady autorotation exists for the new values; "
     v = judge(sub, columns, om_ref, axial, status, trimmed, ref, scale, hover_induced_m_s)
+    t, om = sub[:, cols["t_s"]], sub[:, cols["omega_rad_s"]]
+    lost = np.nonzero(om < 0.5 * omega_ref)[0]
+    if not (axial and trimmed and new_trim_row is not None) and len(lost) and v.collapse_time_s is None \
+            and v.verdict != "numerical-failure":
+        # judged from the speed at the change (itself already falling), a fall to 45 % of the trimmed
+        # autorotation read "stable, rotor speed kept, -20 %" (Fig. 12 softened to GJ 300 at 2 s, then to 250
+        # at 4.5 s); the run's trim is what the rotor speed is lost against, as without the change
+        grew = v.verdict == "flutter"
+        v = Verdict("flutter" if grew else "divergence", v.growth_rate_per_s, v.frequency_hz, float(t[lost[0]]),
+                    v.amplitude, ("a coupled oscillation grew and " if grew else "") + "the rotor speed fell below half "
+                    f"the run's trimmed autorotation ({omega_ref:.1f} rad/s)", "rotor-speed-collapse")
+        v.rotor_speed = _headline(v, t, om, omega_ref)
     # the judged motion starts at the change, not at the run's start (the rotor speed had been steady)
     v.explanation = head + about + v.explanation.replace(DECAYED_FROM_START, "the rotor speed decayed from the change on")
     return v

@@ -161,3 +161,20 @@ def test_a_change_names_only_the_values_that_moved(short_case):
     assert sim.changes[-1][2].startswith("the change to GJ 700 N m^2/rad at t = ")
     sim.set_parameters(gj_nm2=700.0, x_cg=0.38)
     assert sim.changes[-1][2].startswith("the change to CG 38.0 % chord at t = ")
+
+
+def test_a_second_softening_mid_collapse_does_not_hide_the_collapse():
+    """Fig. 12 (rigid, mu 0.1, GJ 1500 softened to 300 at 2 s), and a user's GJ 250 at 4.5 s, while the
+    rotor speed was already falling (19.2 rad/s of the trim's 34.3): judged from the speed at the change,
+    the fall to 15.4 rad/s read "stable, the perturbation decays, rotor speed kept (-20 %)", where the
+    same run without the second change reads the rotor speed lost. The trimmed autorotation is the
+    reference the rotor speed is lost against."""
+    from amra_core.paper_cases import PAPER_CASES
+    from amra_core.scenario import LiveChange, Scenario, run_scenario
+    base = PAPER_CASES["fig12"].scenario()
+    once, twice = run_scenario(base), run_scenario(Scenario(base.case, base.changes + (LiveChange(4.5, gj_nm2=250.0),)))
+    for sim in (once, twice):
+        v = sim.verdict()
+        assert v.outcome == "rotor-speed-collapse" and v.verdict in ("divergence", "flutter"), v
+        assert v.rotor_speed.startswith("rotor speed LOST: below 50 % of trim (17.2 rad/s)"), v.rotor_speed
+    assert 4.5 < twice.verdict().collapse_time_s < 6.0
