@@ -496,7 +496,10 @@ def _judge(h, columns, omega_ref, axial, status, trimmed, ref_row, perturbation_
         if grew:
             return Verdict("flutter", growth, freq, collapse, amp_end,
                            "coupled oscillation grew, then the rotor speed collapsed", "rotor-speed-collapse")
-        return Verdict("divergence", growth, freq, collapse, amp_end, "rotor speed collapsed towards zero",
+        # (not "towards zero": the Fig. 10-13 runs settle at a low rotor speed in the windmill-brake state,
+        # as their cards say, and "collapsed towards zero" contradicted them)
+        return Verdict("divergence", growth, freq, collapse, amp_end,
+                       "the rotor speed collapsed below half its trimmed value",
                        "rotor-speed-collapse")
     if wb is not None and not trimmed and collapse is None and status != "rotor-stopped":
         vd0, vd_end, x_end = wb

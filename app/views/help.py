@@ -17,7 +17,7 @@ VERDICTS = (
     ("flutter", "An oscillation of teeter, twist and rotor speed grows (or saturates into a limit cycle, "
                 "reported with its amplitude). In autorotation it usually drags the rotor speed down."),
     ("divergence", "A monotonic runaway: the twist grows without oscillating, or the rotor speed falls "
-                   "steadily towards zero."),
+                   "steadily, below half its trimmed value (it may settle there, slow and descending fast)."),
     ("overspeed", "The rotor speed runs away upwards (a nose-down twist, e.g. with the CG ahead of the "
                   "elastic axis, lowers the blade pitch and speeds the rotor up)."),
     ("fold / no-autorotation", "No torque balance exists: the nose-up elastic twist has raised the blade pitch "
