@@ -89,7 +89,8 @@ def monodromy(model: CompiledModel, y0: np.ndarray, dt: float, scheme: str = "fo
     n = len(y0)
     Phi = np.zeros((n - 1, n - 1))
     paths = None if observe is None else np.zeros((len(times), len(observe), n - 1))  # G Phi(t_k, 0), by columns
-    a, b = np.zeros((len(times), n - 1)), np.zeros((len(times), n - 1))
+    # the states along the marches are copied out only when their signals are asked for
+    a, b = (None, None) if observe is None else (np.zeros((len(times), n - 1)), np.zeros((len(times), n - 1)))
     if scheme == "forward":
         yb = march(y0.copy(), b)
     for i in range(1, n):
@@ -143,7 +144,8 @@ def floquet_krylov(model: CompiledModel, y0: np.ndarray, dt: float, n_modes: int
     march, T, times = _one_revolution(model, y0, dt)
     n = len(y0) - 1
     scale = np.maximum(1.0, np.abs(y0[1:]))
-    b, a = np.zeros((len(times), n)), np.zeros((len(times), n))
+    # the states along the marches are copied out only when their signals are asked for
+    b, a = (None, None) if observe is None else (np.zeros((len(times), n)), np.zeros((len(times), n)))
     base = march(y0.copy(), b)[1:]
     W = None if observe is None else np.zeros((len(times), len(observe), min(n, KRYLOV_MAX_DIM)))  # G Phi(t) D Q_j
     m_max = min(n, KRYLOV_MAX_DIM)

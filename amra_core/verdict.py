@@ -199,29 +199,31 @@ def _envelope_series(t, e, window):
     return np.array(tc), np.log(np.array(ec))
 
 
-def _last_third_slope(t, e, window) -> float:
-    """Slope [1/s] of the log envelope of ``e`` over the run's last third (inf when too short to say)."""
+def _last_third(t, e, window):
+    """(slope [1/s], last value) of the log envelope of ``e`` over the run's last third, or None when
+    the run has fewer than 9 envelope windows."""
     ser = _envelope_series(t, e, window)
     if ser is None or len(ser[0]) < 9:
-        return math.inf
+        return None
     tc, ec = ser
     last = slice(2 * len(tc) // 3, len(tc))
-    return float(np.polyfit(tc[last], ec[last], 1)[0])
+    return float(np.polyfit(tc[last], ec[last], 1)[0]), float(ec[-1])
+
+
+def _last_third_slope(t, e, window) -> float:
+    """Slope [1/s] of the log envelope of ``e`` over the run's last third (inf when too short to say)."""
+    fit = _last_third(t, e, window)
+    return math.inf if fit is None else fit[0]
 
 
 def _sustained(t, e, window, amp_start) -> bool:
     """True if the envelope of ``e`` over the last third of the run neither decays (slope above
     SUSTAINED_SLOPE_PER_S) nor has fallen below SUSTAINED_FRACTION of its start: a bounded oscillation."""
-    ser = _envelope_series(t, e, window)
-    if ser is None or amp_start is None:
+    fit = _last_third(t, e, window) if amp_start is not None else None
+    if fit is None:
         return False
-    tc, ec = ser
-    n = len(tc)
-    if n < 9:
-        return False
-    last = slice(2 * n // 3, n)
-    slope = np.polyfit(tc[last], ec[last], 1)[0]
-    return bool(slope > SUSTAINED_SLOPE_PER_S and math.exp(ec[-1]) >= SUSTAINED_FRACTION * amp_start)
+    slope, last = fit
+    return bool(slope > SUSTAINED_SLOPE_PER_S and math.exp(last) >= SUSTAINED_FRACTION * amp_start)
 
 
 def _limit_cycle(h, cols, d, scale, axial) -> dict:
